@@ -1,0 +1,47 @@
+"""mechderive — derive, verify and simulate the motion of rigid bodies.
+
+The chapter this toolkit covers is "The Motion of Rigid Bodies" (equations
+(3.1)–(3.103)); docstrings cite its equation numbers.  Conventions: the body
+frame is e_a = R_ab ẽ_b with R(φ, θ, ψ) = R3(ψ) R1(θ) R3(φ) (3.54); SI units or
+any consistent set; angles in radians.
+
+``import mechderive`` is light: it imports neither SymPy nor matplotlib, and
+derives nothing.  The public names below are loaded on first use.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
+__version__ = "0.1.0"
+
+# public name -> module that defines it
+_PUBLIC = {
+    "MechDeriveError": "mechderive.errors",
+    "rotation_matrix": "mechderive.kinematics.euler",
+    "euler_rotation": "mechderive.kinematics.euler",
+    "angular_velocity_body": "mechderive.kinematics.euler",
+    "angular_velocity_space": "mechderive.kinematics.euler",
+    "euler_angles_from_matrix": "mechderive.kinematics.euler",
+    "to_scipy_rotation": "mechderive.kinematics.conversions",
+    "from_scipy_rotation": "mechderive.kinematics.conversions",
+    "matrix_to_quaternion": "mechderive.kinematics.conversions",
+    "quaternion_to_matrix": "mechderive.kinematics.conversions",
+    "run_claims": "mechderive.catalog.registry",
+}
+
+__all__ = sorted(_PUBLIC) + ["__version__"]
+
+
+def __getattr__(name: str) -> Any:
+    module = _PUBLIC.get(name)
+    if module is None:
+        raise AttributeError(f"module 'mechderive' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return __all__

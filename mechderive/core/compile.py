@@ -1,0 +1,108 @@
+"""Symbolic → numeric: SymPy expressions compiled to vectorised NumPy functions.
+
+One way from formula to function (STYLE.md habit 4): :func:`compile_expressions`
+takes an expression, or a (nested) list / Matrix of them, and an ordered sequence
+of argument symbols, and returns a function ``f(*args)`` that broadcasts over
+NumPy arrays.  It uses :func:`sympy.lambdify` with common-subexpression
+elimination (``cse=True``), and keeps every result in a process-wide cache keyed
+by the expressions' ``srepr`` and the argument list, so identical requests never
+compile twice.  The generated function's docstring lists the argument order.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import threading
+from typing import Any, Callable, Sequence
+
+import numpy as np
+
+__all__ = ["compile_expressions", "compile_cache_info", "clear_compile_cache"]
+
+_CACHE: dict[str, Callable[..., Any]] = {}
+_LOCK = threading.Lock()
+_STATS = {"hits": 0, "misses": 0}
+
+
+def _key(exprs: Any, args: Sequence[Any]) -> str:
+    import sympy as sp
+
+    text = sp.srepr(exprs) + "|" + sp.srepr(tuple(args))
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def compile_expressions(exprs: Any, args: Sequence[Any], *, name: str = "f") -> Callable[..., Any]:
+    """Return a vectorised NumPy function evaluating ``exprs`` at ``args``.
+
+    Parameters
+    ----------
+    exprs
+        A SymPy expression, a Matrix, or a (nested) list/tuple of expressions.
+    args
+        The argument symbols, in calling order.
+    name
+        A name for the function (used in its docstring and in logs).
+
+    The result returns a float array of ``exprs``' shape, broadcast over the
+    arguments' shapes: for a 3×3 Matrix and arguments of shape (N,), shape
+    (3, 3, N) is *not* what you get — the result is moved so that the broadcast
+    dimensions come first: shape (N, 3, 3).  Scalars stay scalars.
+
+    >>> import sympy as sp
+    >>> x, y = sp.symbols("x y")
+    >>> f = compile_expressions(sp.Matrix([[x, y], [x * y, 1]]), [x, y])
+    >>> f(np.array([1.0, 2.0]), 3.0).shape
+    (2, 2, 2)
+    """
+    import sympy as sp
+
+    key = _key(exprs, args)
+    with _LOCK:
+        hit = _CACHE.get(key)
+        if hit is not None:
+            _STATS["hits"] += 1
+            return hit
+    shape: tuple[int, ...]
+    if isinstance(exprs, sp.MatrixBase):
+        shape = exprs.shape
+        flat = list(exprs)
+    elif isinstance(exprs, (list, tuple)):
+        arr = np.array(exprs, dtype=object)
+        shape = arr.shape
+        flat = list(arr.ravel())
+    else:
+        shape = ()
+        flat = [exprs]
+    raw = sp.lambdify(list(args), flat, modules="numpy", cse=True)
+
+    def compiled(*values: Any) -> np.ndarray:
+        if len(values) != len(args):
+            raise TypeError(f"{name}() expected {len(args)} arguments ({', '.join(map(str, args))}), got {len(values)}")
+        vals = [np.asarray(v, dtype=float) for v in values]
+        out = raw(*vals)
+        bshape = np.broadcast_shapes(*(v.shape for v in vals)) if vals else ()
+        stacked = np.stack([np.broadcast_to(np.asarray(o, dtype=float), bshape) for o in out], axis=-1)
+        result = stacked.reshape(bshape + shape)
+        return result if result.shape else float(result)
+
+    compiled.__name__ = name
+    compiled.__doc__ = f"{name}({', '.join(map(str, args))}) -> array of shape (*broadcast, {', '.join(map(str, shape))})"
+    compiled.args = tuple(args)  # type: ignore[attr-defined]
+    compiled.shape = shape  # type: ignore[attr-defined]
+    with _LOCK:
+        _STATS["misses"] += 1
+        _CACHE.setdefault(key, compiled)
+        return _CACHE[key]
+
+
+def compile_cache_info() -> dict[str, int]:
+    """Hits, misses and size of the process-wide compile cache."""
+    with _LOCK:
+        return {"hits": _STATS["hits"], "misses": _STATS["misses"], "size": len(_CACHE)}
+
+
+def clear_compile_cache() -> None:
+    """Empty the process-wide compile cache (for tests and benchmarks)."""
+    with _LOCK:
+        _CACHE.clear()
+        _STATS["hits"] = _STATS["misses"] = 0

@@ -1,0 +1,100 @@
+"""Lazily derived symbolic quantities, each derived once and logged.
+
+A *model* is the symbolic side of a physical system: a set of quantities derived
+by SymPy from first principles.  Each quantity is a method decorated with
+:func:`derived`; it is computed on first access, cached on the instance, and its
+name appended to :attr:`SymbolicModel.derived`.  Quantities that need others
+simply access them, so the log lists exactly the derivations a request caused,
+in the order they ran — the lazy-evaluation tests read it.
+
+Models hold no numbers: parameters stay symbols, so one model instance per
+system serves every numeric case in the process (see ``model()`` functions in the
+system modules).  Compiled NumPy functions are obtained through
+:meth:`SymbolicModel.compile`, which goes through :mod:`mechderive.core.compile`'s
+cache and logs the name in :attr:`SymbolicModel.compiled`.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any, Callable, Sequence, TypeVar
+
+from . import compile as _compile
+
+__all__ = ["SymbolicModel", "derived"]
+
+T = TypeVar("T")
+
+
+class derived:  # noqa: N801 - used as a decorator, like functools.cached_property
+    """Mark a method of a :class:`SymbolicModel` as a lazily derived quantity.
+
+    The method runs once per model instance, on first attribute access; the result
+    is cached and the quantity's name logged in ``model.derived``.
+    """
+
+    def __init__(self, func: Callable[[Any], T]):
+        self.func = func
+        self.name = func.__name__
+        self.__doc__ = func.__doc__
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        self.name = name
+
+    def __get__(self, instance: "SymbolicModel | None", owner: type | None = None) -> Any:
+        if instance is None:
+            return self
+        cache = instance._derived_cache
+        if self.name not in cache:
+            start = time.perf_counter()
+            value = self.func(instance)
+            cache[self.name] = value
+            instance.derived.append(self.name)
+            instance.timings[self.name] = time.perf_counter() - start
+        return cache[self.name]
+
+
+class SymbolicModel:
+    """Base class of the symbolic models: a log of derivations and compilations.
+
+    Attributes
+    ----------
+    derived : list[str]
+        Names of the quantities derived by this instance, in order.
+    compiled : list[str]
+        Names of the functions this instance obtained from the compile layer.
+    timings : dict[str, float]
+        Seconds spent in each derivation (excluding the ones it triggered first? no:
+        inclusive of quantities it needed, which are logged separately as well).
+    """
+
+    def __init__(self) -> None:
+        self._derived_cache: dict[str, Any] = {}
+        self._compiled_cache: dict[str, Callable[..., Any]] = {}
+        self.derived: list[str] = []
+        self.compiled: list[str] = []
+        self.timings: dict[str, float] = {}
+
+    @classmethod
+    def quantities(cls) -> list[str]:
+        """Names of every quantity this model can derive."""
+        return [name for name in dir(cls) if isinstance(getattr(cls, name, None), derived)]
+
+    def is_derived(self, name: str) -> bool:
+        """Whether ``name`` has been derived by this instance."""
+        return name in self._derived_cache
+
+    def compile(self, name: str, exprs: Any, args: Sequence[Any]) -> Callable[..., Any]:
+        """Compile ``exprs`` as a function of ``args`` (once per model and name).
+
+        See :func:`mechderive.core.compile.compile_expressions` for the calling
+        convention of the result.
+        """
+        if name not in self._compiled_cache:
+            self._compiled_cache[name] = _compile.compile_expressions(exprs, args, name=name)
+            self.compiled.append(name)
+        return self._compiled_cache[name]
+
+    def report(self) -> dict[str, Any]:
+        """What this model has done so far: derivations, compilations and their times."""
+        return {"derived": list(self.derived), "compiled": list(self.compiled), "timings": dict(self.timings)}

@@ -1,0 +1,61 @@
+"""The toolkit's named symbols, one place for every layer.
+
+Time-dependent coordinates are SymPy functions of the time symbol ``t``
+(``phi(t)``, ...), so that derivatives are taken by :func:`sympy.diff`.  Before
+compilation, :func:`to_state_symbols` replaces them and their derivatives by
+plain real symbols with the names used throughout the toolkit and its scene
+files: ``phi, theta, psi, phi_dot, theta_dot, psi_dot, phi_ddot, ...``.
+"""
+
+from __future__ import annotations
+
+import functools
+from typing import Any
+
+import sympy as sp
+
+__all__ = ["t", "coordinate", "euler_angles", "state_symbol", "to_state_symbols"]
+
+#: The time symbol.
+t = sp.Symbol("t", real=True)
+
+
+@functools.cache
+def coordinate(name: str) -> sp.Function:
+    """The generalised coordinate ``name`` as a real function of time, ``name(t)``."""
+    return sp.Function(name, real=True)(t)
+
+
+def euler_angles() -> tuple[sp.Expr, sp.Expr, sp.Expr]:
+    """The Euler angles (φ(t), θ(t), ψ(t)) of (3.50)–(3.54)."""
+    return coordinate("phi"), coordinate("theta"), coordinate("psi")
+
+
+@functools.cache
+def state_symbol(name: str) -> sp.Symbol:
+    """A plain real symbol with ``name`` (e.g. ``theta_dot``)."""
+    return sp.Symbol(name, real=True)
+
+
+_SUFFIX = {0: "", 1: "_dot", 2: "_ddot"}
+
+
+def to_state_symbols(expr: Any) -> Any:
+    """Replace q(t), q'(t), q''(t) in ``expr`` by symbols q, q_dot, q_ddot.
+
+    >>> phi = coordinate("phi")
+    >>> to_state_symbols(sp.diff(phi**2, t))
+    2*phi*phi_dot
+    """
+    expr = sp.sympify(expr)
+    subs: dict[Any, Any] = {}
+    for d in expr.atoms(sp.Derivative):
+        if isinstance(d.expr, sp.core.function.AppliedUndef) and d.variables and set(d.variables) == {t}:
+            order = len(d.variables)
+            if order not in _SUFFIX:
+                raise ValueError(f"expected derivatives of order <= 2, got order {order} in {d}")
+            subs[d] = state_symbol(d.expr.func.__name__ + _SUFFIX[order])
+    # Derivatives first, so that q(t) inside them is not replaced first.
+    expr = expr.subs(subs)
+    funcs = {f: state_symbol(f.func.__name__) for f in expr.atoms(sp.core.function.AppliedUndef) if f.args == (t,)}
+    return expr.subs(funcs)

@@ -1,0 +1,1 @@
+"""Kinematics: rotations, Euler angles, angular velocity, conversions, path-ordered exponentials (3.1, 3.5)."""
