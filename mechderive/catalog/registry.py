@@ -168,7 +168,7 @@ def run_claims(section: str | None = None, claims: Iterable[Claim] | None = None
 
 
 def perturb(formula: Any) -> Any:
-    """A deliberately wrong version of ``formula``: its first entry scaled by 101/100 (or set to 1/7 if zero).
+    """A deliberately wrong version of ``formula``: its first entry scaled by 101/100 and shifted by 1/7.
 
     Works on SymPy expressions and numbers, matrices, and (nested) tuples/lists/dicts of them.
     """
@@ -188,4 +188,6 @@ def perturb(formula: Any) -> Any:
     if isinstance(formula, sp.Equality):
         return sp.Eq(formula.lhs, perturb(formula.rhs), evaluate=False)
     expr = sp.sympify(formula)
-    return sp.Rational(1, 7) if expr == 0 else expr * sp.Rational(101, 100)
+    # Scale *and* shift: scaling alone leaves an entry that is identically zero (but not
+    # structurally 0, like an unsimplified diagonal of ṘRᵀ) unchanged.
+    return expr * sp.Rational(101, 100) + sp.Rational(1, 7)

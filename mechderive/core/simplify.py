@@ -60,12 +60,32 @@ def trig_normal(expr: Any) -> sp.Expr:
     return num_r.subs(back) / den_r.subs(back_d)
 
 
-def is_zero(expr: Any) -> bool:
-    """True iff ``expr`` (a rational trigonometric expression) is identically zero — an exact test."""
-    expr = sp.expand_trig(sp.sympify(expr))
+def is_zero(expr: Any) -> bool | None:
+    """Whether ``expr`` is identically zero, decided exactly; ``None`` when this method cannot decide.
+
+    The answer is exact (True or False) when ``expr`` is a rational function of
+    symbols and of sines, cosines and tangents; for anything else (square roots,
+    exponentials, unknown functions) the result is ``None`` and the caller must
+    use another method.
+    """
+    expr = sp.sympify(expr).replace(sp.tan, lambda x: sp.sin(x) / sp.cos(x))
+    expr = sp.expand_trig(expr)
     num, _ = sp.fraction(sp.together(expr))
     sym, _, _, rels = _trig_symbols(num)
+    if not _is_rational_in_symbols(sym):
+        return None
     return _reduce_poly(sym, rels) == 0
+
+
+def _is_rational_in_symbols(expr: sp.Expr) -> bool:
+    """True if ``expr`` is built from symbols and numbers by +, *, and integer powers only."""
+    for node in sp.preorder_traversal(expr):
+        if isinstance(node, (sp.Symbol, sp.Number, sp.Add, sp.Mul)):
+            continue
+        if isinstance(node, sp.Pow) and node.exp.is_Integer:
+            continue
+        return False
+    return True
 
 
 def simplify_trig(expr: Any) -> sp.Expr:
