@@ -1,0 +1,35 @@
+"""Shared fixtures: global numeric state is reset around every test (STYLE.md habit 11)."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import mpmath
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+@pytest.fixture(autouse=True)
+def _reset_mpmath_precision():
+    dps = mpmath.mp.dps
+    yield
+    mpmath.mp.dps = dps
+
+
+@pytest.fixture
+def rng() -> np.random.Generator:
+    """A seeded generator: random cases are reproducible."""
+    return np.random.default_rng(20261121)
+
+
+def run_python(*args: str, timeout: float = 300) -> subprocess.CompletedProcess:
+    """Run ``python *args`` from the repository root with the package importable."""
+    env = dict(os.environ)
+    env["PYTHONPATH"] = str(ROOT) + os.pathsep + env.get("PYTHONPATH", "")
+    return subprocess.run([sys.executable, *args], cwd=ROOT, env=env, capture_output=True, text=True,
+                          timeout=timeout)

@@ -1,0 +1,128 @@
+"""The derive→compile core: lazy derivation logs, the compile cache, exact trig simplification, validation."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import sympy as sp
+
+from mechderive.core import compile as cc
+from mechderive.core.model import SymbolicModel, derived
+from mechderive.core.simplify import is_zero, simplify_trig, trig_normal
+from mechderive.core.validate import as_finite_array, check_positive
+from mechderive.errors import InvalidInputError, NonFiniteValueError, ShapeError
+from mechderive.kinematics.euler import KinematicsModel
+
+
+# --- laziness: a request derives only what it needs --------------------------------------------
+
+def test_requesting_rotation_derives_nothing_about_angular_velocity():
+    m = KinematicsModel()
+    assert m.derived == []
+    m.state_rotation
+    assert m.derived == ["R3", "R1", "rotation", "state_rotation"]
+    assert not m.is_derived("angular_velocity_matrix")
+
+
+def test_body_angular_velocity_does_not_derive_space_or_convective_quantities():
+    m = KinematicsModel()
+    m.state_angular_velocity_body
+    assert set(m.derived) == {"R3", "R1", "rotation", "angular_velocity_matrix", "angular_velocity_body",
+                              "state_angular_velocity_body"}
+    before = list(m.derived)
+    m.state_angular_velocity_body  # cached: no second derivation
+    assert m.derived == before
+
+
+def test_derived_runs_once_and_is_logged_in_order():
+    calls = []
+
+    class Toy(SymbolicModel):
+        @derived
+        def a(self):
+            calls.append("a")
+            return sp.Symbol("x") ** 2
+
+        @derived
+        def b(self):
+            calls.append("b")
+            return self.a.diff(sp.Symbol("x"))
+
+    toy = Toy()
+    assert toy.b == 2 * sp.Symbol("x")
+    assert toy.b == 2 * sp.Symbol("x")
+    # b starts first and asks for a; the log records completions, so a precedes b.
+    assert calls == ["b", "a"] and toy.derived == ["a", "b"]
+    assert Toy.quantities() == ["a", "b"]
+
+
+# --- the compile layer -----------------------------------------------------------------------
+
+def test_compile_cache_never_compiles_twice():
+    x, y = sp.symbols("x y")
+    expr = sp.Matrix([[sp.sin(x) * y, x], [y, 1]])
+    before = cc.compile_cache_info()
+    f1 = cc.compile_expressions(expr, [x, y], name="f")
+    f2 = cc.compile_expressions(sp.Matrix([[sp.sin(x) * y, x], [y, 1]]), [x, y], name="g")
+    after = cc.compile_cache_info()
+    assert f1 is f2
+    assert after["misses"] - before["misses"] <= 1 and after["hits"] - before["hits"] >= 1
+
+
+def test_compiled_matrix_broadcasts_and_matches_sympy(rng):
+    x, y = sp.symbols("x y")
+    expr = sp.Matrix([[sp.sin(x) * y, x], [sp.exp(y), 1]])
+    f = cc.compile_expressions(expr, [x, y])
+    xs, ys = rng.normal(size=5), rng.normal(size=5)
+    out = f(xs, ys)
+    assert out.shape == (5, 2, 2)
+    for i in range(5):
+        ref = np.array(expr.subs({x: xs[i], y: ys[i]}).evalf(30), dtype=float)
+        np.testing.assert_allclose(out[i], ref, rtol=1e-15)
+    assert f(0.5, 2.0).shape == (2, 2)
+    assert "x, y" in f.__doc__
+
+
+def test_compiled_scalar_returns_float():
+    x = sp.Symbol("x")
+    assert cc.compile_expressions(x**2, [x])(3.0) == 9.0
+
+
+def test_model_compile_logs_name_once():
+    m = KinematicsModel()
+    syms = [sp.Symbol(n, real=True) for n in ("phi", "theta", "psi")]
+    f1 = m.compile("R", m.state_rotation, syms)
+    f2 = m.compile("R", m.state_rotation, syms)
+    assert f1 is f2 and m.compiled == ["R"]
+
+
+# --- exact trigonometric identities ----------------------------------------------------------
+
+def test_is_zero_proves_identities_and_refutes_non_identities():
+    a, b, c = sp.symbols("a b c", real=True)
+    assert is_zero(sp.sin(a) ** 2 + sp.cos(a) ** 2 - 1) is True
+    assert is_zero(sp.sin(a + b) - sp.sin(a) * sp.cos(b) - sp.cos(a) * sp.sin(b)) is True
+    assert is_zero(sp.tan(a) * sp.cos(a) - sp.sin(a)) is True
+    assert is_zero(c * (sp.cos(a) ** 4 - sp.sin(a) ** 4 - sp.cos(2 * a))) is True
+    assert is_zero(sp.sin(a) ** 2 - sp.cos(a) ** 2) is False
+    assert is_zero(sp.sin(a) * 1.0000001 - sp.sin(a)) is False
+    assert is_zero(sp.sqrt(a) - 1) is None  # outside the method: caller must decide otherwise
+
+
+def test_trig_normal_and_simplify_trig():
+    a = sp.Symbol("a", real=True)
+    assert trig_normal(sp.cos(a) ** 2 + sp.sin(a) ** 2) == 1
+    assert simplify_trig((1 - sp.cos(a) ** 2) / sp.sin(a)) == sp.sin(a)
+
+
+# --- validation ------------------------------------------------------------------------------
+
+def test_validation_messages():
+    with pytest.raises(ShapeError, match=r"expected `w` to have shape \(3,\), got \(2,\)"):
+        as_finite_array([1.0, 2.0], "w", shape=(3,))
+    with pytest.raises(NonFiniteValueError, match="expected `w` to be finite, got inf"):
+        as_finite_array([1.0, np.inf, 0.0], "w")
+    with pytest.raises(InvalidInputError, match="expected `w` to be numeric, got 'abc'"):
+        as_finite_array("abc", "w")
+    with pytest.raises(InvalidInputError, match=r"expected `I1` > 0, got -1.0"):
+        check_positive(-1, "I1")
