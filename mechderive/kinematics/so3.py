@@ -26,10 +26,8 @@ __all__ = ["hat", "vee", "expm_so3", "logm_so3"]
 def hat(omega: np.ndarray) -> np.ndarray:
     """The antisymmetric matrix ω_ab = ε_abc ω_c of a vector (shape (..., 3) → (..., 3, 3)).
 
-    >>> hat([0.0, 0.0, 1.0])
-    array([[ 0.,  1.,  0.],
-           [-1.,  0.,  0.],
-           [ 0.,  0.,  0.]])
+    >>> hat([0.0, 0.0, 1.0]).tolist()
+    [[0.0, 1.0, -0.0], [-1.0, 0.0, 0.0], [0.0, -0.0, 0.0]]
     """
     w = np.asarray(omega, dtype=float)
     out = np.zeros(w.shape[:-1] + (3, 3))
