@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 import sympy as sp
 
+from ..core.compile import compile_expressions
 from ..core.symbols import t
 from ..kinematics import dyson
 from ..kinematics.dyson import eps, so3_matrix, t1, t2
@@ -41,9 +42,7 @@ _W_EXPR = sp.Matrix([sp.sin(t) + sp.Rational(1, 2), sp.Rational(7, 10) * sp.cos(
 
 
 def _w_numeric(times: np.ndarray) -> np.ndarray:
-    f = sp.lambdify(t, list(_W_EXPR), "numpy")
-    times = np.asarray(times, dtype=float)
-    return np.stack(np.broadcast_arrays(*f(times)), axis=-1)
+    return compile_expressions(list(_W_EXPR), [t], name="path_ordered_test_omega")(np.asarray(times, dtype=float))
 
 
 def _inverse(m: sp.MatrixSymbol) -> sp.Matrix:
@@ -55,6 +54,7 @@ def _check_3_11(formula: Any) -> Outcome:
     """Evaluate the formula on Ṙ, R of the integrator's solution of Ṙ = ωR; it must return ω."""
     from ..kinematics.path_ordered import path_ordered_exponential
 
+    # The formula under test is lambdified directly: perturbed copies must not fill the compile cache.
     f = sp.lambdify([_RDOT, _R], sp.Matrix(formula), "numpy")
     delta = 5e-3
     worst = 0.0
@@ -212,7 +212,7 @@ def _check_3_15(formula: Any) -> Outcome:
     from scipy.integrate import solve_ivp
 
     f = sp.lambdify([t, eps], sp.Matrix(formula), "numpy")
-    w = sp.lambdify(t, dyson.model().test_omega, "numpy")
+    w = dyson.model().compile("test_omega", dyson.model().test_omega, [t])
     amplitudes = np.array([0.2, 0.1, 0.05, 0.025])
     errors = []
     for a in amplitudes:
