@@ -67,7 +67,10 @@ class FreeTopExactModel(SymbolicModel):
 
     @derived
     def constants(self) -> dict[str, sp.Expr]:
-        """P², S², λ², Q², m and 1 - m as functions of I_x, I_y, I_z, 2T (``E2``) and L² (``L2``)."""
+        """P², S², λ², Q², m and 1 - m as functions of I_x, I_y, I_z, 2T (``E2``) and L² (``L2``).
+
+        Also ``Q`` itself in terms of P, S and λ (the sign of Q follows from theirs).
+        """
         quad = {_cn**2: 1 - _sn**2, _dn**2: 1 - _m * _sn**2}
         two_T = sp.Poly(sp.expand((Ix * (_P * _cn) ** 2 + Iy * (_Q * _sn) ** 2 + Iz * (_S * _dn) ** 2).subs(quad)), _sn)
         L_sq = sp.Poly(sp.expand((Ix**2 * (_P * _cn) ** 2 + Iy**2 * (_Q * _sn) ** 2
@@ -90,7 +93,7 @@ class FreeTopExactModel(SymbolicModel):
         m_expr = sp.factor(sp.expand(m_expr).subs({_P**2: sol[p2], _lam**2: lam_sq}))
         m1_expr = sp.factor(1 - m_expr)
         out = {"P2": sp.factor(sol[p2]), "S2": sp.factor(sol[s2]), "lambda2": lam_sq, "Q2": q_sq,
-               "m": m_expr, "m1": m1_expr}
+               "m": m_expr, "m1": m1_expr, "Q": q_expr}
         self._verify(out)
         return out
 
