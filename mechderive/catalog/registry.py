@@ -28,7 +28,10 @@ SECTION_MODULES = (
     "mechderive.catalog.s3_1_path_ordered",
     "mechderive.catalog.s3_2_inertia",
     "mechderive.catalog.s3_3_rigid_motion",
+    "mechderive.catalog.s3_3_euler_equations",
+    "mechderive.catalog.s3_4_free_tops",
     "mechderive.catalog.s3_5_euler_angles",
+    "mechderive.catalog.s3_5_3_free_symmetric_top",
 )
 
 
