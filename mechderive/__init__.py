@@ -28,6 +28,17 @@ _PUBLIC = {
     "from_scipy_rotation": "mechderive.kinematics.conversions",
     "matrix_to_quaternion": "mechderive.kinematics.conversions",
     "quaternion_to_matrix": "mechderive.kinematics.conversions",
+    "path_ordered_exponential": "mechderive.kinematics.path_ordered",
+    "naive_exponential": "mechderive.kinematics.path_ordered",
+    "inertia_tensor": "mechderive.inertia.tensor",
+    "kinetic_energy": "mechderive.inertia.tensor",
+    "angular_momentum": "mechderive.inertia.tensor",
+    "body_inertia": "mechderive.inertia.bodies",
+    "inertia_from_density": "mechderive.inertia.density",
+    "parallel_axis": "mechderive.inertia.parallel_axis",
+    "principal_axes": "mechderive.inertia.principal",
+    "check_inertia_tensor": "mechderive.inertia.validate",
+    "check_principal_moments": "mechderive.inertia.validate",
     "run_claims": "mechderive.catalog.registry",
 }
 

@@ -23,7 +23,12 @@ def display_symbols(expr: Any) -> Any:
     for s in expr.free_symbols:
         for suffix in ("_ddot", "_dot"):
             if s.name.endswith(suffix):
-                subs[s] = sp.Symbol(s.name[: -len(suffix)] + suffix[1:], **s.assumptions0)
+                base = s.name[: -len(suffix)]
+                stem = base.rstrip("0123456789")
+                index = base[len(stem):]
+                # "omega1_dot" -> "omegadot_1": SymPy puts the dot on ω and keeps the subscript
+                name = f"{stem}{suffix[1:]}_{index}" if index else f"{base}{suffix[1:]}"
+                subs[s] = sp.Symbol(name, **s.assumptions0)
                 break
     return expr.subs(subs)
 
