@@ -1,0 +1,15 @@
+"""Reusable numerical pieces: quaternion kinematics, symmetric compositions, the Lie–Poisson splitting.
+
+* :mod:`.quaternion` — q̇ = ½ q ⊗ (0, ω) for the quaternion of A = Rᵀ (derived from Ṙ = hat(ω) R, 3.11);
+* :mod:`.composition` — triple-jump, Suzuki and Yoshida weights raising a symmetric order-2 step to 4 and 6;
+* :mod:`.lie_poisson` — exact axis sub-flows of the free rigid body and their composition (one body or M).
+
+The system-level entry point is :func:`mechderive.systems.free_top.integrate.integrate_free_top`.
+"""
+
+from __future__ import annotations
+
+from .composition import suzuki_fractal, triple_jump, yoshida6
+from .quaternion import quaternion_multiply, quaternion_rate
+
+__all__ = ["quaternion_multiply", "quaternion_rate", "triple_jump", "suzuki_fractal", "yoshida6"]
