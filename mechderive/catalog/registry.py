@@ -32,6 +32,7 @@ SECTION_MODULES = (
     "mechderive.catalog.s3_4_free_tops",
     "mechderive.catalog.s3_5_euler_angles",
     "mechderive.catalog.s3_5_3_free_symmetric_top",
+    "mechderive.catalog.s3_6_heavy_top",
 )
 
 

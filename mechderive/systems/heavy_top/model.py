@@ -1,0 +1,455 @@
+"""Symbolic model of the heavy symmetric top, section 3.6: derived through the Lagrangian layer.
+
+Conventions.  The top is pinned at P; I1 = I2 and I3 are its principal moments *about P*,
+l is the distance from P to the centre of mass, which lies on the symmetry axis e3.  Euler
+angles as in (3.54), R(φ, θ, ψ) = R3(ψ) R1(θ) R3(φ) with e_a = R_ab ẽ_b, and θ measured
+from the upward vertical ẽ3.  Units: any consistent set (moments mass × length², rates in
+rad per unit time).
+
+Nothing of (3.62)–(3.83) is typed in.  Two inputs:
+
+- T = ½ ωᵀ diag(I1, I1, I3) ω with the body components ω of (3.58), derived from ṘRᵀ by
+  :mod:`mechderive.kinematics.euler`;
+- V = M g × (height of the centre of mass l e3 above P) = M g l ẽ3·e3 = M g l R33.
+
+and the text's definitions, used as such: a = I3ω3/I1, b = p_φ/I1 (3.66), E' = E − ½I3ω3²,
+u = cos θ (3.71), α = 2E'/I1, β = 2Mgl/I1 (3.72).  From L = T − V the generic
+:class:`~mechderive.core.lagrangian.LagrangianModel` finds φ and ψ ignorable, their momenta
+(3.63)–(3.64), the energy (3.65), the Routhian that gives (3.67)–(3.70), and the equations of
+motion.  The rest follows by algebra on those results: f(u) of (3.73) from E' (u̇² = f(u)),
+the released top (3.77)–(3.78), uniform precession (3.79)–(3.81) and the sleeping top
+(3.82)–(3.83).
+
+Symbols: ``I1 I3 M g l`` (positive), ``a b alpha`` (real), ``beta`` (positive), ``u u0`` (real),
+``theta0`` (real), ``omega3`` (the spin, real), ``p_phi p_psi`` (conserved momenta); state
+symbols ``phi theta psi phi_dot theta_dot psi_dot`` (:mod:`mechderive.core.symbols`).
+
+>>> m = model()
+>>> m.cyclic_coordinates
+(phi(t), psi(t))
+>>> m.precession_rate_u           # (3.74)
+(-a*u + b)/(1 - u**2)
+>>> m.f_u                         # (3.73), u̇² = f(u)
+-alpha*u**2 + alpha + beta*u**3 - beta*u - (a*u - b)**2
+>>> m.sleeping_threshold_spin     # (3.83): I3 ω3 = 2 √(I1 M g l)
+2*sqrt(I1)*sqrt(M)*sqrt(g)*sqrt(l)/I3
+"""
+
+from __future__ import annotations
+
+import functools
+from typing import Any, Callable
+
+import sympy as sp
+
+from ...core.lagrangian import LagrangianModel, from_state_symbols, vanishes
+from ...core.model import derived
+from ...core.simplify import simplify_trig, trig_normal
+from ...core.symbols import euler_angles, state_symbol, t, to_state_symbols
+from ...errors import DerivationError
+from ...kinematics import euler as _euler
+
+__all__ = ["HeavyTopModel", "model", "I1", "I3", "M", "g", "l", "a", "b", "alpha", "beta", "u", "u0", "theta0",
+           "omega3", "p_phi", "p_psi", "PARAMETERS", "STATE"]
+
+I1, I3, M, g, l = sp.symbols("I1 I3 M g l", positive=True)
+a, b, alpha = sp.symbols("a b alpha", real=True)
+beta = sp.Symbol("beta", positive=True)
+u, u0, theta0 = sp.symbols("u u0 theta0", real=True)
+omega3 = state_symbol("omega3")
+p_phi, p_psi = sp.symbols("p_phi p_psi", real=True)
+E_prime = sp.Symbol("E_prime", real=True)
+
+phi, theta, psi = (state_symbol(n) for n in ("phi", "theta", "psi"))
+phi_dot, theta_dot, psi_dot = (state_symbol(n) for n in ("phi_dot", "theta_dot", "psi_dot"))
+
+#: The parameters, in the argument order of the compiled functions.
+PARAMETERS = (I1, I3, M, g, l)
+#: The state the constants of motion depend on (φ and ψ are ignorable), in argument order.
+STATE = (theta, theta_dot, phi_dot, psi_dot)
+
+
+def _readable(expr: sp.Expr, collect: tuple = (I1, I3)) -> sp.Expr:
+    """``expr`` collected on ``collect``, each coefficient in the shorter of two exact forms.
+
+    The trig normal form writes cos² as 1 − sin²; rewriting sin² as 1 − cos² and factoring
+    sometimes gives a perfect square, e.g. φ̇² cos²θ + 2φ̇ψ̇ cos θ + ψ̇² = (ψ̇ + φ̇ cos θ)².
+    """
+    parts = sp.collect(sp.expand(expr), list(collect), evaluate=False)
+    out = sp.Integer(0)
+    for key, coeff in parts.items():
+        alt = sp.factor(sp.expand(coeff.replace(sp.sin, lambda x: sp.sqrt(1 - sp.cos(x) ** 2))))
+        out += key * (alt if sp.count_ops(alt) < sp.count_ops(coeff) else coeff)
+    return out
+
+
+def _in_u(expr: sp.Expr) -> sp.Expr:
+    """``expr`` with θ = arccos u (so cos θ = u, sin θ = √(1 − u²) for 0 ≤ θ ≤ π), as one fraction."""
+    return sp.factor(sp.cancel(sp.sympify(expr).subs(theta, sp.acos(u))))
+
+
+def _over_one_minus_u2(expr: sp.Expr) -> sp.Expr:
+    """A rational function of u over (1 − u²), as one fraction or as (polynomial) + N(u)/(1 − u²), the shorter."""
+    expr = sp.factor(sp.cancel(sp.together(expr)))
+    num, den = sp.fraction(expr)
+    scale = sp.cancel(den / (1 - u**2))
+    if scale.has(u):
+        return expr
+    whole = sp.factor(num / scale) / (1 - u**2)
+    q, r = sp.div(sp.Poly(num, u), sp.Poly(den, u))
+    split = sp.factor(q.as_expr()) + sp.factor(r.as_expr() / scale) / (1 - u**2)
+    return min((whole, split), key=sp.count_ops)
+
+
+def _theta_form(expr: sp.Expr) -> sp.Expr:
+    """A rational function of cos θ and sin²θ, tidied through u = cos θ and written back with sin²θ = 1 − u²."""
+    return _over_one_minus_u2(_in_u(expr)).subs(u, sp.cos(theta)).subs(1 - sp.cos(theta) ** 2, sp.sin(theta) ** 2)
+
+
+#: A sample point with cos θ0 > 0 and ω3 > 0, used only to pick between the roots SymPy returns.
+_SAMPLE = {I1: 3, I3: 2, M: 1, g: sp.Rational(98, 10), l: sp.Rational(1, 2), omega3: 40, theta0: sp.Rational(1, 2)}
+
+
+def _positive_at_sample(candidates: list) -> sp.Expr:
+    """The one candidate that is positive at :data:`_SAMPLE` (raise if not exactly one)."""
+    pos = [c for c in candidates if sp.N(c.subs(_SAMPLE)) > 0]
+    if len(pos) != 1:
+        raise DerivationError(f"expected exactly one positive candidate, got {candidates}")
+    return pos[0]
+
+
+class HeavyTopModel(LagrangianModel):
+    """The heavy symmetric top of section 3.6, derived from L = T − V; every quantity lazy.
+
+    Coordinates (φ(t), θ(t), ψ(t)) in that order: :attr:`accelerations` are (φ̈, θ̈, ψ̈).
+    """
+
+    coordinates = euler_angles()
+
+    # --- (3.62): the Lagrangian -------------------------------------------------------------
+
+    @derived
+    def kinetic_energy(self) -> sp.Expr:
+        """T = ½ ωᵀ diag(I1, I1, I3) ω with ω from (3.58) (derived from ṘRᵀ); state symbols."""
+        w = _euler.model().state_angular_velocity_body
+        return _readable(simplify_trig((w.T * sp.diag(I1, I1, I3) * w)[0] / 2))
+
+    @derived
+    def potential_energy(self) -> sp.Expr:
+        """V = M g ẽ3·(l e3) = M g l R33 (e3·ẽ3 = R33 since e_a = R_ab ẽ_b): M g l cos θ."""
+        return M * g * l * _euler.model().state_rotation[2, 2]
+
+    @derived
+    def lagrangian(self) -> sp.Expr:
+        """L = T − V (3.62), in functions of t."""
+        return from_state_symbols(self.kinetic_energy - self.potential_energy, self.coordinates)
+
+    # --- (3.63)-(3.65): constants of motion ---------------------------------------------------
+
+    @derived
+    def spin(self) -> sp.Expr:
+        """ω3 = ψ̇ + φ̇ cos θ, the body component of ω along the symmetry axis (3.58)."""
+        return _euler.model().state_angular_velocity_body[2]
+
+    @derived
+    def spin_momentum(self) -> sp.Expr:
+        """p_ψ = ∂L/∂ψ̇ (3.63), conserved since ψ is ignorable; checked equal to I3 ω3."""
+        p = self.conserved_momenta[self.coordinates[2]]
+        if not vanishes(p - I3 * self.spin):
+            raise DerivationError(f"expected p_ψ = I3 ω3, got {p}")
+        return sp.factor(p)
+
+    @derived
+    def azimuthal_momentum(self) -> sp.Expr:
+        """p_φ = ∂L/∂φ̇ (3.64), conserved since φ is ignorable."""
+        return _readable(self.conserved_momenta[self.coordinates[0]])
+
+    @derived
+    def energy(self) -> sp.Expr:
+        """E = Σ q̇ ∂L/∂q̇ − L (3.65), checked equal to T + V (T is quadratic in the rates)."""
+        h = self.energy_function
+        if not vanishes(h - self.kinetic_energy - self.potential_energy):
+            raise DerivationError(f"expected the energy function to equal T + V, got {h}")
+        return _readable(self.kinetic_energy + self.potential_energy)
+
+    @derived
+    def reduced_energy_state(self) -> sp.Expr:
+        """E' = E − ½ I3 ω3² as a function of the state (the text's definition before (3.69))."""
+        return _readable(sp.expand(self.energy - I3 * self.spin**2 / 2))
+
+    @derived
+    def constants_from_state(self) -> dict:
+        """{a, b, α, β} of (3.66), (3.72) in the parameters and the state (θ, θ̇, φ̇, ψ̇)."""
+        return {a: I3 * self.spin / I1, b: self.azimuthal_momentum / I1,
+                alpha: 2 * self.reduced_energy_state / I1, beta: 2 * M * g * l / I1}
+
+    # --- (3.66)-(3.70): reduction to θ ------------------------------------------------------
+
+    @derived
+    def momenta_in_ab(self) -> dict:
+        """{p_φ: I1 b, p_ψ: I1 a}: the definitions (3.66) solved, with p_ψ = I3 ω3 from (3.63)."""
+        _ = self.spin_momentum  # establishes p_ψ = I3 ω3
+        sym = self.momentum_symbols
+        pf, ps = sym[self.coordinates[0]], sym[self.coordinates[2]]
+        sol = sp.solve([I1 * a - I3 * omega3, I1 * b - pf, ps - I3 * omega3], [pf, ps, omega3], dict=True)
+        if len(sol) != 1:
+            raise DerivationError(f"expected one solution for (p_φ, p_ψ) in a, b, got {sol}")
+        return {pf: sol[0][pf], ps: sol[0][ps]}
+
+    def _rate(self, name: str) -> sp.Expr:
+        return _theta_form(self.cyclic_velocities[state_symbol(name)].subs(self.momenta_in_ab))
+
+    @derived
+    def precession_rate_theta(self) -> sp.Expr:
+        """φ̇ as a function of θ, a, b (3.67): solved from the conserved momenta."""
+        return self._rate("phi_dot")
+
+    @derived
+    def spin_rate_theta(self) -> sp.Expr:
+        """ψ̇ as a function of θ, a, b (3.68): solved from the conserved momenta."""
+        return self._rate("psi_dot")
+
+    @derived
+    def spin_energy(self) -> sp.Expr:
+        """½ I3 ω3² in the conserved momenta (= p_ψ²/(2 I3)): the constant E' leaves out."""
+        e = sp.factor(simplify_trig((I3 * self.spin**2 / 2).subs(self.cyclic_velocities)))
+        if e.has(theta, theta_dot):
+            raise DerivationError(f"expected ½ I3 ω3² to depend on the momenta only, got {e}")
+        return e
+
+    @derived
+    def effective_potential_theta(self) -> sp.Expr:
+        """V_eff(θ) of (3.70): the Routhian's effective potential less ½ I3 ω3², in a, b."""
+        v = _in_u((self.effective_potential - self.spin_energy).subs(self.momenta_in_ab))
+        gravity = sp.expand(v).coeff(M)
+        return M * sp.factor(gravity).subs(u, sp.cos(theta)) + _theta_form(v - M * gravity)
+
+    @derived
+    def reduced_energy(self) -> sp.Expr:
+        """E' (3.69) in θ, θ̇, a, b: the Routhian's energy Σ θ̇ ∂R/∂θ̇ − R (which is E) less ½ I3 ω3²."""
+        R = self.routhian
+        h = sp.expand((theta_dot * R.diff(theta_dot) - R - self.spin_energy).subs(self.momenta_in_ab))
+        mass, rest = h.coeff(theta_dot, 2), h.coeff(theta_dot, 0)
+        if sp.expand(h - mass * theta_dot**2 - rest) != 0 or mass.has(theta):
+            raise DerivationError(f"expected E' = c θ̇² + W(θ) with constant c, got {h}")
+        gravity = sp.expand(_in_u(rest)).coeff(M)
+        return sp.factor(mass) * theta_dot**2 + M * sp.factor(gravity).subs(u, sp.cos(theta)) + \
+            _theta_form(rest - M * gravity.subs(u, sp.cos(theta)))
+
+    # --- (3.71)-(3.76): the cubic f(u) ------------------------------------------------------
+
+    @derived
+    def u_dot_squared(self) -> sp.Expr:
+        """u̇² for u = cos θ (3.71), by differentiating cos θ(t): sin²θ θ̇²."""
+        return to_state_symbols(sp.cos(self.coordinates[1]).diff(t) ** 2)
+
+    @derived
+    def f_u(self) -> sp.Expr:
+        """f(u) of (3.73): u̇² with θ̇² from E' = ½I1θ̇² + V_eff, E' = I1α/2, Mgl = I1β/2, cos θ = u.
+
+        A polynomial in u (checked) with coefficients in a, b, α, β.
+        """
+        E = self.reduced_energy
+        mass, rest = E.coeff(theta_dot, 2), E.subs(theta_dot, 0)
+        if sp.expand(E - mass * theta_dot**2 - rest) != 0:
+            raise DerivationError(f"expected E' = c θ̇² + W(θ), got {E}")
+        rate_squared = (E_prime - rest) / mass  # θ̇² from (3.69)
+        M_of_beta = sp.solve(beta - 2 * M * g * l / I1, M)[0]
+        f = self.u_dot_squared.subs(theta_dot**2, rate_squared).subs({E_prime: I1 * alpha / 2, M: M_of_beta})
+        f = sp.cancel(_in_u(f))
+        if not f.is_polynomial(u) or f.free_symbols - {u, a, b, alpha, beta}:
+            raise DerivationError(f"expected f(u) polynomial in u with coefficients in a, b, α, β, got {f}")
+        # readable: the part in α, β factored as (1 − u²)(α − βu) would be, the rest as −(b − au)²
+        rest = sp.expand(f).coeff(alpha, 0).coeff(beta, 0)
+        return sp.expand(f - rest) + sp.factor(rest)
+
+    @derived
+    def f_polynomial(self) -> sp.Poly:
+        """f(u) (3.73) as a :class:`sympy.Poly` in u over the coefficients a, b, α, β."""
+        return sp.Poly(self.f_u, u)
+
+    @derived
+    def precession_rate_u(self) -> sp.Expr:
+        """φ̇(u) of (3.74): (3.67) at cos θ = u."""
+        return _over_one_minus_u2(_in_u(self.precession_rate_theta))
+
+    @derived
+    def spin_rate_u(self) -> sp.Expr:
+        """ψ̇(u) of (3.75): (3.68) at cos θ = u."""
+        return _over_one_minus_u2(_in_u(self.spin_rate_theta))
+
+    @derived
+    def f_at_poles(self) -> tuple[sp.Expr, sp.Expr]:
+        """(f(1), f(−1)) (3.76), factored."""
+        return tuple(sp.factor(self.f_u.subs(u, x)) for x in (1, -1))  # type: ignore[return-value]
+
+    @derived
+    def f_limits(self) -> tuple[sp.Expr, sp.Expr]:
+        """(lim f as u → +∞, lim f as u → −∞) (3.76): ±∞ since the leading term is β u³, β > 0."""
+        return sp.limit(self.f_u, u, sp.oo), sp.limit(self.f_u, u, -sp.oo)
+
+    @derived
+    def f_coefficients(self) -> tuple[sp.Expr, ...]:
+        """The coefficients of u³, u², u, 1 in f(u) (3.73), in a, b, α, β."""
+        coeffs = tuple(sp.factor(c) for c in self.f_polynomial.all_coeffs())
+        if len(coeffs) != 4:
+            raise DerivationError(f"expected a cubic f(u), got coefficients {coeffs}")
+        return coeffs
+
+    @derived
+    def f_coefficients_state(self) -> tuple[sp.Expr, ...]:
+        """The coefficients of u³, u², u, 1 in f(u) as functions of the parameters and the state (θ, θ̇, φ̇, ψ̇).
+
+        a, b, α, β replaced by their definitions (3.66), (3.72) evaluated at the state; then
+        f(cos θ) = sin²θ θ̇² at that state, and the roots of f bound the motion in u.
+        """
+        return tuple(sp.factor(trig_normal(c.subs(self.constants_from_state))) for c in self.f_coefficients)
+
+    def f_coefficients_function(self) -> Callable[..., Any]:
+        """Compiled ``f(I1, I3, M, g, l, theta, theta_dot, phi_dot, psi_dot)`` → shape (..., 4): f's coefficients of u³, u², u, 1.
+
+        For a numeric root finder: ``numpy.roots(f(...))`` gives u1 ≤ u2 in [−1, 1] and a third root ≥ 1.
+        """
+        return self.compile("f_coefficients", list(self.f_coefficients_state), [*PARAMETERS, *STATE])
+
+    def invariants_function(self) -> Callable[..., Any]:
+        """Compiled ``f(I1, I3, M, g, l, theta, theta_dot, phi_dot, psi_dot)`` → shape (..., 3): (E, p_φ, p_ψ)."""
+        exprs = [self.energy, self.azimuthal_momentum, self.spin_momentum]
+        return self.compile("invariants", exprs, [*PARAMETERS, *STATE])
+
+    # --- (3.77)-(3.78): letting the top go ----------------------------------------------------
+
+    @derived
+    def released_u(self) -> sp.Expr:
+        """u at release (3.77): the root of φ̇(u) = 0, i.e. of b − a u = 0."""
+        num, _ = sp.fraction(sp.together(self.precession_rate_u))
+        sol = sp.solve(num, u)
+        if len(sol) != 1:
+            raise DerivationError(f"expected one zero of φ̇(u), got {sol}")
+        return sol[0]
+
+    @derived
+    def released_f_slope(self) -> sp.Expr:
+        """f'(u0) for a top released at rest in θ and φ (b = a u0 and f(u0) = 0): −β(1 − u0²) < 0.
+
+        Negative slope: f > 0 just below u0, so u0 is the upper root u2 and θ increases.
+        """
+        f = self.f_u.subs(b, a * u0)
+        alpha_rel = sp.solve(f.subs(u, u0), alpha)
+        if len(alpha_rel) != 1:
+            raise DerivationError(f"expected one α with f(u0) = 0, got {alpha_rel}")
+        return sp.factor(f.diff(u).subs(u, u0).subs(alpha, alpha_rel[0]))
+
+    @derived
+    def azimuthal_momentum_spin(self) -> sp.Expr:
+        """p_φ in θ, φ̇ and the spin ω3 (3.78): ψ̇ eliminated with ω3 = ψ̇ + φ̇ cos θ."""
+        rate = sp.solve(omega3 - self.spin, psi_dot)[0]
+        return _readable(sp.expand(self.azimuthal_momentum.subs(psi_dot, rate)), (I1, I3))
+
+    @derived
+    def released_azimuthal_momentum(self) -> sp.Expr:
+        """p_φ at release, φ̇ = 0 (3.78): I3 ω3 cos θ."""
+        return sp.factor(self.azimuthal_momentum_spin.subs(phi_dot, 0))
+
+    # --- (3.79)-(3.81): uniform precession ---------------------------------------------------
+
+    @derived
+    def double_root_conditions(self) -> tuple[sp.Expr, sp.Expr]:
+        """(f(u0), f'(u0)) (3.79): both vanish at a double root u0 — motion with θ̇ ≡ 0."""
+        return self.f_u.subs(u, u0), sp.expand(self.f_u.diff(u)).subs(u, u0)
+
+    @derived
+    def uniform_precession_half_beta(self) -> sp.Expr:
+        """½β from (3.79) with φ̇ = φ̇(u0) (3.74): b and α eliminated, giving a φ̇ − φ̇² u0."""
+        b_of_rate = sp.solve(phi_dot - self.precession_rate_u.subs(u, u0), b)[0]
+        f0, df0 = (c.subs(b, b_of_rate) for c in self.double_root_conditions)
+        alpha_sol = sp.solve(f0, alpha)
+        if len(alpha_sol) != 1:
+            raise DerivationError(f"expected f(u0) = 0 linear in α, got {alpha_sol}")
+        beta_sol = sp.solve(sp.factor(df0.subs(alpha, alpha_sol[0])), beta)
+        if len(beta_sol) != 1:
+            raise DerivationError(f"expected f'(u0) = 0 linear in β, got {beta_sol}")
+        return sp.expand(beta_sol[0] / 2)
+
+    @derived
+    def uniform_precession_condition(self) -> sp.Equality:
+        """(3.80): M g l = I1 β/2 with a = I3ω3/I1 and u0 = cos θ0, a quadratic in φ̇."""
+        rhs = (I1 * self.uniform_precession_half_beta).subs({a: I3 * omega3 / I1, u0: sp.cos(theta0)})
+        return sp.Eq(M * g * l, sp.factor(sp.expand(rhs)))
+
+    @derived
+    def uniform_precession_polynomial(self) -> sp.Poly:
+        """rhs − lhs of (3.80) as a polynomial in φ̇ (degree 2 when cos θ0 ≠ 0, 1 at θ0 = π/2)."""
+        eq = self.uniform_precession_condition
+        return sp.Poly(sp.expand(eq.rhs - eq.lhs), phi_dot)
+
+    @derived
+    def precession_discriminant(self) -> sp.Expr:
+        """The discriminant of (3.80) in φ̇: I3²ω3² − 4 I1 M g l cos θ0 (real rates iff ≥ 0)."""
+        return sp.factor(sp.discriminant(self.uniform_precession_polynomial.as_expr(), phi_dot))
+
+    @derived
+    def precession_rates(self) -> tuple[sp.Expr, sp.Expr]:
+        """(slow, fast): the two roots φ̇ of (3.80), named for cos θ0 > 0 and ω3 > 0 (slow < fast).
+
+        For cos θ0 < 0 (a hanging top) the two are real for every spin and of opposite signs.
+        """
+        roots = list(sp.roots(self.uniform_precession_polynomial))
+        if len(roots) != 2:
+            raise DerivationError(f"expected two precession rates, got {roots}")
+        slow, fast = sorted(roots, key=lambda r: sp.N(r.subs(_SAMPLE)))
+        return slow, fast
+
+    @derived
+    def minimum_spin(self) -> sp.Expr:
+        """(3.81): the ω3 > 0 at which the discriminant vanishes, for cos θ0 > 0: (2/I3)√(M g l I1 cos θ0)."""
+        roots = sp.solve(self.precession_discriminant, omega3)
+        return _positive_at_sample(roots)
+
+    # --- (3.82)-(3.83): the sleeping top -----------------------------------------------------
+
+    @derived
+    def sleeping_constants(self) -> dict:
+        """{b: …, β: …} at θ = θ̇ = 0 (3.82), with a and α at the same state substituted back."""
+        upright = {theta: 0, theta_dot: 0}
+        c = {k: sp.simplify(v.subs(upright)) for k, v in self.constants_from_state.items()}
+        spin_of_a = sp.solve(a - c[a], psi_dot)
+        if len(spin_of_a) != 1:
+            raise DerivationError(f"expected a linear in ψ̇ upright, got {c[a]}")
+        b_up = sp.simplify(c[b].subs(psi_dot, spin_of_a[0]))
+        beta_up = sp.simplify(c[beta] - c[alpha] + alpha)
+        return {b: b_up, beta: beta_up}
+
+    @derived
+    def sleeping_f(self) -> sp.Expr:
+        """f(u) for the sleeping top (3.83): (3.73) with b = a and β = α, factored."""
+        return sp.factor(self.f_u.subs(self.sleeping_constants))
+
+    @derived
+    def sleeping_roots(self) -> dict:
+        """{root: multiplicity} of the sleeping top's f(u): a double root at 1 and u2 = a²/α − 1."""
+        return sp.roots(sp.Poly(self.sleeping_f, u))
+
+    @derived
+    def sleeping_second_root(self) -> sp.Expr:
+        """u2, the root of the sleeping top's f(u) other than u = 1 (3.83)."""
+        others = [r for r in self.sleeping_roots if r != 1]
+        if len(others) != 1 or self.sleeping_roots.get(sp.Integer(1)) != 2:
+            raise DerivationError(f"expected a double root at u = 1 and one more, got {self.sleeping_roots}")
+        return others[0]
+
+    @derived
+    def sleeping_second_root_spin(self) -> sp.Expr:
+        """u2 in the spin: a = I3ω3/I1 and α = β = 2Mgl/I1 substituted (u2 > 1: stable, (3.83) case 1)."""
+        return sp.expand(self.sleeping_second_root.subs({a: I3 * omega3 / I1, alpha: 2 * M * g * l / I1}))
+
+    @derived
+    def sleeping_threshold_spin(self) -> sp.Expr:
+        """The spin ω3 > 0 at which u2 = 1: below it the sleeping top is unstable ((3.83), last paragraph)."""
+        return _positive_at_sample(sp.solve(self.sleeping_second_root_spin - 1, omega3))
+
+
+@functools.cache
+def model() -> HeavyTopModel:
+    """The process-wide heavy-top model (derivations shared by every caller)."""
+    return HeavyTopModel()
