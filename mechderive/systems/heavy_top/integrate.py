@@ -1,0 +1,595 @@
+"""Numerical integration of the heavy symmetric top (3.62)–(3.75) on a non-singular state.
+
+State: the body components ω_a of the angular velocity (rad/s) and the unit quaternion q of
+A = Rᵀ (scalar first) — never Euler angles, whose equations are singular at θ = 0 (the
+sleeping top of 3.6.3: there the usual Lagrangian right-hand side returns NaN).  The initial
+state is given in the scene-file convention (Euler angles and rates, (3.54), (3.58)) and
+converted exactly by (3.58) (:func:`initial_state`) and
+:func:`~mechderive.kinematics.conversions.euler_to_quaternion`, so θ = 0 exactly and θ > π/2
+(a hanging top) are ordinary states.  The Euler angles are recovered from R(t) afterwards.
+
+Equations (derived in :mod:`.rigid_model`, compiled once): Euler's equations with the gravity
+torque τ = M g l (R23, -R13, 0) and q̇ = ½ q ⊗ (0, ω).
+
+Parameters, ``params = dict(I1=, I3=, M=, g=, l=)``: the principal moments I1 = I2 and I3 about
+the **pivot** (kg m²), the mass M (kg), gravity g (m/s²) and the pivot–centre-of-mass distance
+l (m).  The motion depends on M, g, l only through M g l; M and l are still needed, separately,
+to check that a rigid body with these moments exists: the moments about the centre of mass,
+I1_cm = I1 - M l² (parallel axes) and I3_cm = I3, must satisfy the triangle inequality
+I1_cm + I2_cm ≥ I3_cm, i.e. **I1 - M l² ≥ I3/2** (the triangle inequality holds about any
+point, but the pivot's form, I3 ≤ 2 I1, is weaker and does not exclude impossible bodies).
+Accepted: I1, I3, M > 0; g ≥ 0 (g = 0 or l = 0: the free symmetric top); l ≥ 0 (the centre of
+mass on the +e3 side, as in the chapter's figure 42).  For example I1 = 1, I3 = 0.5 with M = l = 1
+is refused (I1_cm = 0 < 0.25 — no body has it), while M g l = 1 realised as M = 1, g = 4,
+l = 0.25 (I1_cm = 0.9375) gives the same motion.
+
+Initial state, ``initial = dict(theta=, phi=, psi=, theta_dot=, phi_dot=, psi_dot=)`` (rad,
+rad/s): ``theta`` in [0, π] is required, the others default to 0.
+
+Methods (``method=``):
+
+``"DOP853"``
+    :func:`scipy.integrate.solve_ivp`, adaptive, on (ω, q); ``rtol`` (default 1e-10), ``atol``
+    (default rtol/100).  |q| is a first integral of q̇ = ½ q ⊗ (0, ω); it is integrated
+    unconstrained and projected at output (its drift is reported).
+
+``"splitting"``
+    The kick–drift–kick splitting H = T + V (:mod:`mechderive.solvers.kick_drift`): the free
+    symmetric top's exact flow (two commuting rotations, :attr:`.rigid_model.HeavyTopRigidModel.free_flow`)
+    and the gravity kick L → L + h τ(q), Strang-composed (order 2) and raised to order 4 / 6
+    (Suzuki's 5-stage fractal / Yoshida's 7-stage solution A, ``order=``; default 4).  Fixed
+    step: each interval of ``t_eval`` is cut into ceil(Δt/``step``) equal steps.  Both sub-flows
+    are exact Hamiltonian flows, so the method is symplectic and time-reversible: the energy error
+    stays bounded (no drift), and p_ψ = I3 ω3 and p_φ = L·ẽ3 — invariants of each sub-flow — are
+    kept to rounding.
+
+Units: any consistent set (SI above).
+
+>>> import numpy as np
+>>> params = dict(I1=1.0, I3=0.5, M=1.0, g=4.0, l=0.25)          # M g l = 1
+>>> t = np.linspace(0.0, 3.5177, 3)
+>>> run = integrate_heavy_top(params, dict(theta=0.5, psi_dot=5.0), t, rtol=1e-12)
+>>> np.round(run.euler_angles[:, 1], 6).tolist()                 # θ: 0.5 → 0.7576 → 0.5 (one nutation period)
+[0.5, 0.757638, 0.5]
+>>> split = integrate_heavy_top(params, dict(theta=0.0, psi_dot=10.0), t, method="splitting", step=0.01)
+>>> float(split.euler_angles[:, 1].max()), bool(split.p_phi_drift < 1e-14)   # a sleeping top stays upright
+(0.0, True)
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any, Callable, Sequence
+
+import numpy as np
+
+from ...core.validate import as_finite_array, check_positive
+from ...errors import InvalidInputError, ShapeError, UnphysicalInertiaError
+from ...kinematics.conversions import euler_to_quaternion, quaternion_to_matrix
+from ...kinematics.euler import euler_angles_from_matrix
+from ...solvers import kick_drift
+from ..free_top.integrate import SPLITTING_ORDERS, IntegrationError, _check_times, _interval_steps
+
+__all__ = ["integrate_heavy_top", "integrate_heavy_top_ensemble", "HeavyTopTrajectory", "HeavyTopEnsemble",
+           "check_params", "check_initial", "initial_state", "continuous_euler_angles", "IntegrationError",
+           "METHODS", "SPLITTING_ORDERS", "PARAM_KEYS", "INITIAL_KEYS"]
+
+METHODS = ("DOP853", "splitting")
+PARAM_KEYS = ("I1", "I3", "M", "g", "l")
+INITIAL_KEYS = ("theta", "phi", "psi", "theta_dot", "phi_dot", "psi_dot")
+_SCIPY_MIN_RTOL = 2.3e-14  # solve_ivp raises rtol below 100·eps to this
+
+
+# --- results ---------------------------------------------------------------------------------
+
+def continuous_euler_angles(angles: np.ndarray) -> np.ndarray:
+    """Unwrap φ and ψ along a time series (N, 3) of (φ, θ, ψ), bridging gimbal-lock samples.
+
+    Where sin θ = 0 only φ + ψ (θ = 0) or φ - ψ (θ = π) is defined and
+    :func:`~mechderive.kinematics.euler.euler_angles_from_matrix` puts it all in φ; such samples
+    take ψ from the nearest sample before them (or, at the start, after them), keeping
+    φ ± ψ.  A run that stays at θ = 0 throughout keeps ψ = 0 and φ = φ + ψ.  (Same rule as
+    ``mechderive.systems.free_top.exact._continuous_euler_angles``, duplicated because that
+    module was not committed when this one was written — merge into kinematics.euler.)
+
+    >>> a = np.array([[3.0, 0.5, 0.2], [-3.0, 0.5, 0.3], [-2.9, 0.0, 0.0]])   # φ wraps, then θ = 0
+    >>> np.round(continuous_euler_angles(a), 4).tolist()
+    [[3.0, 0.5, 0.2], [3.2832, 0.5, 0.3], [3.0832, 0.0, 0.3]]
+    """
+    ang = np.array(angles, dtype=float)
+    if ang.ndim != 2 or len(ang) < 2:
+        return ang
+    lock = np.abs(np.sin(ang[:, 1])) < 1e-12
+    if lock.any() and not lock.all():
+        idx = np.where(~lock, np.arange(len(ang)), -1)
+        prev = np.maximum.accumulate(idx)
+        src = np.where(prev >= 0, prev, int(np.argmax(~lock)))
+        sign = np.where(np.cos(ang[:, 1]) > 0, 1.0, -1.0)
+        total = ang[:, 0] + sign * ang[:, 2]
+        psi = np.where(lock, ang[src, 2], ang[:, 2])
+        ang[:, 0] = np.where(lock, total - sign * psi, ang[:, 0])
+        ang[:, 2] = psi
+    ang[:, 0] = np.unwrap(ang[:, 0])
+    ang[:, 2] = np.unwrap(ang[:, 2])
+    return ang
+
+
+@dataclass(frozen=True)
+class HeavyTopTrajectory:
+    """One integrated motion of the heavy symmetric top.
+
+    Attributes
+    ----------
+    t : (N,) times (s); ``t[0]`` is the initial time.
+    omega : (N, 3) body components of ω (rad/s).
+    quaternion : (N, 4) unit quaternion of A = Rᵀ, scalar first (projected onto |q| = 1).
+    params : the checked parameters (floats).
+    method, order : ``"DOP853"`` (order ``None``) or ``"splitting"`` with its order.
+    energy_drift : max_t |E(t) - E(t0)| / (T(t0) + M g l), E = T + V of (3.65) (V ranges over ±M g l).
+    p_phi_drift, p_psi_drift : max_t |p(t) - p(t0)| / L_scale for p_φ = L·ẽ3 (3.64) and p_ψ = I3 ω3
+        (3.63); L_scale = max(|L(t0)|, √(I1 M g l)) (or 1 if both vanish).
+    quaternion_norm_drift : max_t | |q| - 1 | before projection.
+    n_evaluations : right-hand-side evaluations (DOP853) or compiled stage calls (splitting:
+        each one exact free-top drift plus one kick).
+    n_steps : fixed steps (splitting) or ``None`` (DOP853: SciPy does not report accepted steps).
+    omega_error_estimate : estimated max_t |ω - ω_exact| (rad/s), or ``None``.
+    angle_error_estimate : estimated max_t of the rotation angle between R and R_exact (rad), or ``None``.
+    error_estimate_kind : how the estimates were obtained (see :func:`integrate_heavy_top`).
+    wall_time : seconds spent in the main integration (excluding the error-estimate rerun).
+    """
+
+    t: np.ndarray
+    omega: np.ndarray
+    quaternion: np.ndarray
+    params: dict
+    method: str
+    order: int | None
+    energy_drift: float
+    p_phi_drift: float
+    p_psi_drift: float
+    quaternion_norm_drift: float
+    n_evaluations: int
+    n_steps: int | None
+    omega_error_estimate: float | None
+    angle_error_estimate: float | None
+    error_estimate_kind: str
+    wall_time: float
+
+    @functools.cached_property
+    def R(self) -> np.ndarray:
+        """(N, 3, 3) rotation matrices of the chapter's convention, e_a = R_ab ẽ_b."""
+        return quaternion_to_matrix(self.quaternion)
+
+    @functools.cached_property
+    def euler_angles(self) -> np.ndarray:
+        """(N, 3) Euler angles (φ, θ, ψ) of R(t) (3.54), φ and ψ unwrapped (:func:`continuous_euler_angles`).
+
+        θ ∈ [0, π] is accurate everywhere; near θ = 0 only φ + ψ is well conditioned.
+        """
+        return continuous_euler_angles(euler_angles_from_matrix(self.R))
+
+    @functools.cached_property
+    def invariants(self) -> np.ndarray:
+        """(N, 3): E (3.65), p_φ (3.64), p_ψ (3.63) along the motion."""
+        return _evaluate_invariants(self.omega, self.quaternion, self.params)
+
+
+@dataclass(frozen=True)
+class HeavyTopEnsemble:
+    """M heavy tops integrated together by the splitting: arrays (N, M, ·), drifts (M,).
+
+    See :class:`HeavyTopTrajectory` for the fields; ``theta`` is θ(t) of every member.
+    """
+
+    t: np.ndarray
+    omega: np.ndarray
+    quaternion: np.ndarray
+    params: dict
+    order: int
+    energy_drift: np.ndarray
+    p_phi_drift: np.ndarray
+    p_psi_drift: np.ndarray
+    quaternion_norm_drift: np.ndarray
+    n_steps: int
+    wall_time: float
+
+    @property
+    def R(self) -> np.ndarray:
+        """(N, M, 3, 3) rotation matrices, e_a = R_ab ẽ_b."""
+        return quaternion_to_matrix(self.quaternion)
+
+    @property
+    def theta(self) -> np.ndarray:
+        """(N, M) nutation angle θ = arccos R33, computed as atan2(√(R13² + R23²), R33) from q."""
+        q0, q1, q2, q3 = np.moveaxis(self.quaternion, -1, 0)
+        # R33 = q0² - q1² - q2² + q3², √(R13² + R23²) = 2 √((q0² + q3²)(q1² + q2²)) for |q| = 1
+        return np.arctan2(2.0 * np.sqrt((q0**2 + q3**2) * (q1**2 + q2**2)), q0**2 + q3**2 - q1**2 - q2**2)
+
+    @property
+    def body_steps_per_second(self) -> float:
+        """Throughput: bodies × composed steps / wall time."""
+        return self.omega.shape[1] * self.n_steps / self.wall_time if self.wall_time > 0 else math.inf
+
+
+# --- compiled equations ----------------------------------------------------------------------
+
+def _symbols() -> tuple[list, list, list]:
+    from ...systems.free_top.model import omega_symbols
+    from .rigid_model import momentum_symbols, parameters, quaternion_symbols
+
+    return [*omega_symbols(), *quaternion_symbols()], [*momentum_symbols(), *quaternion_symbols()], list(parameters())
+
+
+@functools.cache
+def _rhs() -> Callable[..., list]:
+    """(ω̇, q̇) as one compiled scalar function of (ω1..3, q0..3, I1, I3, M, g, l)."""
+    from ...core.compile import compile_scalar
+    from .rigid_model import model
+
+    state, _, par = _symbols()
+    return compile_scalar(model().rhs, [*state, *par], name="heavy_top_rhs")
+
+
+@functools.cache
+def _euler_rates_to_omega() -> Callable[..., Any]:
+    """Vectorised ω(φ, θ, ψ, φ̇, θ̇, ψ̇), shape (..., 3), compiled from the model."""
+    from ...core.compile import compile_expressions
+    from ...core.symbols import state_symbol
+    from .rigid_model import model
+
+    names = ("phi", "theta", "psi", "phi_dot", "theta_dot", "psi_dot")
+    return compile_expressions(list(model().angular_velocity_from_euler_rates), [state_symbol(n) for n in names],
+                               name="heavy_top_euler_rates_to_omega")
+
+
+@functools.cache
+def _stage(vectorised: bool = False) -> Callable[..., Any]:
+    """kick(h_kick) ∘ free_flow(h_free) compiled: f(L1..3, q0..3, h_free, h_kick, I1, I3, M, g, l)."""
+    from ...core.compile import compile_expressions, compile_scalar
+    from .rigid_model import h_free, h_kick, model
+
+    _, state, par = _symbols()
+    args = [*state, h_free, h_kick, *par]
+    exprs = list(model().stage_map)
+    if vectorised:
+        return compile_expressions(exprs, args, name="heavy_top_stage")
+    return compile_scalar(exprs, args, name="heavy_top_stage")
+
+
+@functools.cache
+def _invariants() -> Callable[..., Any]:
+    """Vectorised (E, p_φ, p_ψ)(ω, q, params), compiled from the model."""
+    from ...core.compile import compile_expressions
+    from .rigid_model import model
+
+    state, _, par = _symbols()
+    m = model()
+    return compile_expressions([m.energy, m.p_phi, m.p_psi], [*state, *par], name="heavy_top_invariants")
+
+
+def _param_values(p: Mapping[str, Any]) -> list[Any]:
+    return [p[k] for k in PARAM_KEYS]
+
+
+def _evaluate_invariants(omega: np.ndarray, q: np.ndarray, p: Mapping[str, Any]) -> np.ndarray:
+    w, qq = np.moveaxis(omega, -1, 0), np.moveaxis(q, -1, 0)
+    return np.asarray(_invariants()(*w, *qq, *_param_values(p)))
+
+
+def _drifts(omega: np.ndarray, q: np.ndarray, p: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Scaled max deviations of E, p_φ, p_ψ from their initial values; omega (N, ..., 3), q (N, ..., 4)."""
+    inv = _evaluate_invariants(omega, q, p)
+    no_gravity = dict(p, g=0.0 * np.asarray(p["g"]))
+    T0 = _evaluate_invariants(omega[0], q[0], no_gravity)[..., 0]
+    mgl = np.asarray(p["M"]) * np.asarray(p["g"]) * np.asarray(p["l"])
+    e_scale = T0 + mgl
+    e_scale = np.where(e_scale > 0, e_scale, 1.0)
+    I = np.stack(np.broadcast_arrays(p["I1"], p["I1"], p["I3"]), axis=-1)
+    L0 = np.linalg.norm(I * omega[0], axis=-1)
+    l_scale = np.maximum(L0, np.sqrt(np.asarray(p["I1"]) * mgl))
+    l_scale = np.where(l_scale > 0, l_scale, 1.0)
+    dev = np.max(np.abs(inv - inv[0]), axis=0)
+    return dev[..., 0] / e_scale, dev[..., 1] / l_scale, dev[..., 2] / l_scale
+
+
+# --- input checks ----------------------------------------------------------------------------
+
+def _check_keys(mapping: Any, name: str, allowed: tuple[str, ...], required: tuple[str, ...]) -> None:
+    if not isinstance(mapping, Mapping):
+        raise InvalidInputError(f"expected `{name}` to be a dict with keys {', '.join(allowed)}, "
+                                f"got {type(mapping).__name__}")
+    unknown = [k for k in mapping if k not in allowed]
+    if unknown:
+        raise InvalidInputError(f"expected `{name}` keys among {', '.join(allowed)}, "
+                                f"got unknown key(s) {', '.join(map(repr, unknown))}")
+    missing = [k for k in required if k not in mapping]
+    if missing:
+        raise InvalidInputError(f"expected `{name}` to have key(s) {', '.join(required)}, "
+                                f"got none for {', '.join(map(repr, missing))}")
+
+
+def _first(arr: np.ndarray, mask: np.ndarray) -> float:
+    return float(np.broadcast_to(arr, mask.shape)[mask].ravel()[0])
+
+
+def check_params(params: Mapping[str, Any], *, rtol: float = 1e-9) -> dict[str, Any]:
+    """Return the parameters as floats (or arrays), raising unless a rigid heavy top has them.
+
+    Checks (see the module docstring): keys exactly I1, I3, M, g, l; finite; I1, I3 > 0;
+    M > 0; g ≥ 0; l ≥ 0; and the centre-of-mass triangle inequality I1 - M l² ≥ I3/2
+    (within ``rtol`` of I1, for a plane body where it holds with equality up to rounding).
+
+    >>> check_params(dict(I1=1.0, I3=0.5, M=1.0, g=1.0, l=1.0))
+    Traceback (most recent call last):
+    ...
+    mechderive.errors.UnphysicalInertiaError: expected I1 - M l² >= I3/2 (the triangle inequality ...), got I1 - M l² = 0 < I3/2 = 0.25
+    """
+    _check_keys(params, "params", PARAM_KEYS, PARAM_KEYS)
+    v = {k: as_finite_array(params[k], f"params['{k}']") for k in PARAM_KEYS}
+    for k in ("I1", "I3"):
+        bad = v[k] <= 0
+        if np.any(bad):
+            raise UnphysicalInertiaError(f"expected params['{k}'] > 0 (a principal moment about the pivot), "
+                                         f"got {_first(v[k], bad):g}")
+    for k, strict in (("M", True), ("g", False), ("l", False)):
+        bad = v[k] <= 0 if strict else v[k] < 0
+        if np.any(bad):
+            raise InvalidInputError(f"expected params['{k}'] {'>' if strict else '>='} 0, got {_first(v[k], bad):g}")
+    I1_cm = v["I1"] - v["M"] * v["l"] ** 2
+    bad = I1_cm < v["I3"] / 2 - rtol * v["I1"]
+    if np.any(bad):
+        raise UnphysicalInertiaError(
+            "expected I1 - M l² >= I3/2 (the triangle inequality I1_cm + I2_cm >= I3 about the centre of mass, "
+            f"I1_cm = I1 - M l²), got I1 - M l² = {_first(I1_cm, bad):.6g} < I3/2 = {_first(v['I3'] / 2, bad):.6g}")
+    return {k: (float(a) if a.ndim == 0 else a) for k, a in v.items()}
+
+
+def check_initial(initial: Mapping[str, Any]) -> dict[str, Any]:
+    """Return the initial Euler angles and rates (rad, rad/s) as floats or arrays, defaults 0 except θ.
+
+    >>> check_initial(dict(theta=0.5, psi_dot=5.0))["psi_dot"]
+    5.0
+    """
+    _check_keys(initial, "initial", INITIAL_KEYS, ("theta",))
+    v = {k: as_finite_array(initial.get(k, 0.0), f"initial['{k}']") for k in INITIAL_KEYS}
+    th = v["theta"]
+    bad = (th < 0) | (th > math.pi)
+    if np.any(bad):
+        raise InvalidInputError(f"expected 0 <= initial['theta'] <= pi, got {_first(th, bad):g}")
+    return {k: (float(a) if a.ndim == 0 else a) for k, a in v.items()}
+
+
+def initial_state(initial: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray]:
+    """(ω0, q0) from checked Euler angles and rates: ω of (3.58), q of R(φ, θ, ψ)ᵀ (exact at θ = 0).
+
+    ω comes from :attr:`.rigid_model.HeavyTopRigidModel.angular_velocity_from_euler_rates` (the same
+    as :func:`~mechderive.kinematics.euler.angular_velocity_body`, which the tests check, but ~20×
+    cheaper to derive in a fresh process); q from :func:`~mechderive.kinematics.conversions.euler_to_quaternion`.
+
+    >>> w0, q0 = initial_state(check_initial(dict(theta=0.0, phi=0.3, psi=0.4, psi_dot=5.0)))
+    >>> w0.tolist(), (np.round(q0, 12) + 0.0).tolist()
+    ([0.0, 0.0, 5.0], [0.939372712847, 0.0, 0.0, 0.342897807455])
+    """
+    w0 = np.asarray(_euler_rates_to_omega()(*(initial[k] for k in ("phi", "theta", "psi", "phi_dot", "theta_dot",
+                                                                  "psi_dot"))), dtype=float)
+    return w0, euler_to_quaternion(initial["phi"], initial["theta"], initial["psi"])
+
+
+def _check_method(method: str) -> str:
+    if method not in METHODS:
+        raise InvalidInputError(f"expected method one of {', '.join(map(repr, METHODS))}, got {method!r}")
+    return method
+
+
+def _check_order(order: int) -> int:
+    if order not in SPLITTING_ORDERS:
+        raise InvalidInputError(f"expected order one of {', '.join(map(str, SPLITTING_ORDERS))}, got {order!r}")
+    return order
+
+
+def _project(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(q/|q| with the sign kept continuous along axis 0, max ||q| - 1|) for q (N, ..., 4)."""
+    norm = np.linalg.norm(q, axis=-1, keepdims=True)
+    return q / norm, np.max(np.abs(norm[..., 0] - 1.0), axis=0)
+
+
+def _rotation_angle_between(q: np.ndarray, q_ref: np.ndarray) -> np.ndarray:
+    """The angle (rad) of the relative rotation between unit quaternions, accurate for small angles."""
+    dot = np.abs(np.sum(q * q_ref, axis=-1))
+    cross = np.linalg.norm(q_ref[..., :1] * q[..., 1:] - q[..., :1] * q_ref[..., 1:]
+                           - np.cross(q_ref[..., 1:], q[..., 1:]), axis=-1)
+    return 2.0 * np.arctan2(cross, dot)
+
+
+# --- the public entry points -----------------------------------------------------------------
+
+def integrate_heavy_top(params: Mapping[str, float], initial: Mapping[str, float], t_eval: Sequence[float], *,
+                        method: str = "DOP853", rtol: float | None = None, atol: float | None = None,
+                        step: float | None = None, order: int | None = None,
+                        estimate_error: bool = True) -> HeavyTopTrajectory:
+    """Integrate the heavy symmetric top from Euler angles and rates at ``t_eval[0]``.
+
+    Parameters
+    ----------
+    params : dict(I1, I3, M, g, l): moments about the pivot (kg m²), mass (kg), gravity (m/s²),
+        pivot–centre-of-mass distance (m); checked by :func:`check_params`.
+    initial : dict(theta, phi, psi, theta_dot, phi_dot, psi_dot) (rad, rad/s); θ ∈ [0, π]
+        required, the others default to 0; checked by :func:`check_initial`.
+    t_eval : strictly increasing output times (s), at least 2.
+    method : ``"DOP853"`` (``rtol``, ``atol``) or ``"splitting"`` (``step`` (s) required,
+        ``order`` 2, 4 (default) or 6).
+    estimate_error : estimate the error by one extra run, reported in ``omega_error_estimate``
+        (rad/s), ``angle_error_estimate`` (rad) and ``error_estimate_kind``:
+        DOP853 — the distance to a rerun at rtol/1000, atol/1000 (rtol floored at 2.3e-14,
+        SciPy's limit: from rtol ≈ 1e-11 on the rerun is < 1000× tighter and the figure a
+        lower bound); splitting — Richardson with the known order p,
+        |y_h - y_(h/2)| · 2^p / (2^p - 1) (the rerun costs twice the main run).
+
+    Raises :class:`~mechderive.errors.InvalidInputError` (or its subclasses
+    :class:`~mechderive.errors.UnphysicalInertiaError`, :class:`~mechderive.errors.NonFiniteValueError`)
+    on bad input, :class:`IntegrationError` if SciPy fails.
+    """
+    method = _check_method(method)
+    p = check_params(params)
+    if any(np.ndim(v) for v in p.values()):
+        raise ShapeError("expected scalar `params` values (use integrate_heavy_top_ensemble for arrays), got arrays")
+    init = check_initial(initial)
+    if any(np.ndim(v) for v in init.values()):
+        raise ShapeError("expected scalar `initial` values (use integrate_heavy_top_ensemble for arrays), got arrays")
+    t = _check_times(t_eval)
+    w0, q0 = initial_state(init)
+    if method == "DOP853":
+        for name, value in (("step", step), ("order", order)):
+            if value is not None:
+                raise InvalidInputError(f"expected `{name}` only with method='splitting', got {name}={value!r} "
+                                        "with method='DOP853'")
+        rtol = 1e-10 if rtol is None else check_positive(rtol, "rtol")
+        atol = rtol / 100 if atol is None else check_positive(atol, "atol")
+        return _run_dop853(p, w0, q0, t, rtol, atol, estimate_error)
+    for name, value in (("rtol", rtol), ("atol", atol)):
+        if value is not None:
+            raise InvalidInputError(f"expected `{name}` only with method='DOP853', got {name}={value!r} "
+                                    "with method='splitting' (set `step` instead)")
+    if step is None:
+        raise InvalidInputError("expected a step size `step` > 0 with method='splitting', got step=None")
+    step = check_positive(step, "step")
+    order = _check_order(4 if order is None else order)
+    return _run_splitting(p, w0, q0, t, step, order, estimate_error)
+
+
+def integrate_heavy_top_ensemble(params: Mapping[str, Any], initial: Mapping[str, Any], t_eval: Sequence[float], *,
+                                 step: float, order: int = 4) -> HeavyTopEnsemble:
+    """Integrate M heavy tops at once with the splitting (vectorised over members).
+
+    Every value of ``params`` and ``initial`` may be a scalar or an array of shape (M,); M is
+    their common broadcast length.  Outputs are (N, M, ·): mind N·M·56 bytes.
+
+    >>> import numpy as np
+    >>> ens = integrate_heavy_top_ensemble(dict(I1=1.0, I3=0.5, M=1.0, g=4.0, l=0.25),
+    ...                                    dict(theta=np.array([0.0, 0.5, 2.5]), psi_dot=5.0),
+    ...                                    [0.0, 1.0], step=0.01)
+    >>> ens.omega.shape, bool(ens.p_psi_drift.max() < 1e-14)
+    ((2, 3, 3), True)
+    """
+    p = check_params(params)
+    init = check_initial(initial)
+    try:
+        shape = np.broadcast_shapes(*(np.shape(v) for v in (*p.values(), *init.values())))
+    except ValueError as exc:
+        raise ShapeError(f"expected `params` and `initial` values of shape () or (M,), got shapes "
+                         f"{[np.shape(v) for v in (*p.values(), *init.values())]}") from exc
+    if len(shape) > 1:
+        raise ShapeError(f"expected `params` and `initial` values of shape () or (M,), got broadcast shape {shape}")
+    M = shape[0] if shape else 1
+    init = {k: np.broadcast_to(v, (M,)).astype(float) for k, v in init.items()}
+    pv = {k: (v if np.ndim(v) == 0 else np.asarray(v, dtype=float)) for k, v in p.items()}
+    t = _check_times(t_eval)
+    step = check_positive(step, "step")
+    weights = SPLITTING_ORDERS[_check_order(order)]
+    w0, q0 = initial_state(init)
+    I = np.stack(np.broadcast_arrays(pv["I1"], pv["I1"], pv["I3"]), axis=-1) * np.ones((M, 1))
+    y = [*(I * w0).T, *q0.T]
+    stage = _stage(vectorised=True)
+    par = _param_values(pv)
+    omegas, quats = [w0.copy()], [q0.copy()]
+    n_total = 0
+    start = time.perf_counter()
+    for n, h in _interval_steps(t, step):
+        y = kick_drift.propagate_ensemble(stage, y, par, h, n, weights)
+        n_total += n
+        omegas.append(np.stack(y[:3], axis=-1) / I)
+        quats.append(np.stack(y[3:], axis=-1))
+    wall = time.perf_counter() - start
+    omega = np.stack(omegas)
+    quat, norm_drift = _project(np.stack(quats))
+    e, pf, ps = _drifts(omega, quat, pv)
+    return HeavyTopEnsemble(t=t, omega=omega, quaternion=quat, params=pv, order=order, energy_drift=e,
+                            p_phi_drift=pf, p_psi_drift=ps, quaternion_norm_drift=norm_drift, n_steps=n_total,
+                            wall_time=wall)
+
+
+# --- the two methods -------------------------------------------------------------------------
+
+def _finish(p: dict, t: np.ndarray, omega: np.ndarray, q_raw: np.ndarray, *, method: str, order: int | None,
+            n_evaluations: int, n_steps: int | None, wall: float, reference: tuple[np.ndarray, np.ndarray] | None,
+            kind: str, richardson: float = 1.0) -> HeavyTopTrajectory:
+    quat, norm_drift = _project(q_raw)
+    w_err = a_err = None
+    if reference is not None:
+        w_ref, q_ref = reference
+        q_ref = q_ref / np.linalg.norm(q_ref, axis=-1, keepdims=True)
+        w_err = float(np.max(np.abs(w_ref - omega)) * richardson)
+        a_err = float(np.max(_rotation_angle_between(quat, q_ref)) * richardson)
+    e, pf, ps = _drifts(omega, quat, p)
+    return HeavyTopTrajectory(t=t, omega=omega, quaternion=quat, params=p, method=method, order=order,
+                              energy_drift=float(e), p_phi_drift=float(pf), p_psi_drift=float(ps),
+                              quaternion_norm_drift=float(norm_drift), n_evaluations=n_evaluations, n_steps=n_steps,
+                              omega_error_estimate=w_err, angle_error_estimate=a_err, error_estimate_kind=kind,
+                              wall_time=wall)
+
+
+def _run_dop853(p: dict, w0: np.ndarray, q0: np.ndarray, t: np.ndarray, rtol: float, atol: float,
+                estimate_error: bool) -> HeavyTopTrajectory:
+    from scipy.integrate import solve_ivp
+
+    rhs = _rhs()
+    args = tuple(_param_values(p))
+
+    def fun(_t: float, y: np.ndarray) -> list:
+        return rhs(*y.tolist(), *args)
+
+    y0 = np.concatenate([w0, q0])
+
+    def solve(rt: float, at: float) -> Any:
+        sol = solve_ivp(fun, (t[0], t[-1]), y0, method="DOP853", t_eval=t, rtol=rt, atol=at)
+        if not sol.success:
+            raise IntegrationError(f"expected solve_ivp(DOP853) to reach t = {t[-1]:g}, got: {sol.message}")
+        return sol
+
+    start = time.perf_counter()
+    sol = solve(rtol, atol)
+    wall = time.perf_counter() - start
+    reference, kind = None, "not requested"
+    if estimate_error:
+        rt_ref = max(rtol * 1e-3, _SCIPY_MIN_RTOL)
+        ref = solve(rt_ref, atol * 1e-3)
+        reference = (ref.y[:3].T, ref.y[3:].T)
+        kind = f"distance to DOP853 at rtol={rt_ref:.2g}, atol={atol * 1e-3:.2g}"
+    return _finish(p, t, sol.y[:3].T.copy(), sol.y[3:].T.copy(), method="DOP853", order=None,
+                   n_evaluations=int(sol.nfev), n_steps=None, wall=wall, reference=reference, kind=kind)
+
+
+def _splitting_path(p: dict, w0: np.ndarray, q0: np.ndarray, t: np.ndarray, step: float,
+                    weights: tuple[float, ...], refine: int = 1) -> tuple[np.ndarray, np.ndarray, int]:
+    stage = _stage()
+    inertia = np.array([p["I1"], p["I1"], p["I3"]])
+    par = _param_values(p)
+    y = [*(inertia * w0).tolist(), *q0.tolist()]
+    ys, n_total = [y], 0
+    for n, h in _interval_steps(t, step, refine):
+        y = kick_drift.propagate(stage, y, par, h, n, weights)
+        ys.append(y)
+        n_total += n
+    arr = np.array(ys)
+    return arr[:, :3] / inertia, arr[:, 3:], n_total
+
+
+def _run_splitting(p: dict, w0: np.ndarray, q0: np.ndarray, t: np.ndarray, step: float, order: int,
+                   estimate_error: bool) -> HeavyTopTrajectory:
+    weights = SPLITTING_ORDERS[order]
+    _stage()  # compile (once per process) outside the timed run
+    start = time.perf_counter()
+    omega, q_raw, n_steps = _splitting_path(p, w0, q0, t, step, weights)
+    wall = time.perf_counter() - start
+    reference, kind, factor = None, "not requested", 1.0
+    if estimate_error:
+        w_fine, q_fine, _ = _splitting_path(p, w0, q0, t, step, weights, refine=2)
+        reference, factor = (w_fine, q_fine), 2.0**order / (2.0**order - 1.0)
+        kind = f"Richardson: max |y_h - y_(h/2)| · 2^{order}/(2^{order} - 1), y = ω and the orientation"
+    n_stage = n_steps * kick_drift.stages_per_step(weights) + (len(t) - 1)
+    return _finish(p, t, omega, q_raw, method="splitting", order=order, n_evaluations=n_stage, n_steps=n_steps,
+                   wall=wall, reference=reference, kind=kind, richardson=factor)
