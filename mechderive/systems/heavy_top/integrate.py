@@ -72,6 +72,8 @@ from ...errors import InvalidInputError, ShapeError, UnphysicalInertiaError
 from ...kinematics.conversions import euler_to_quaternion, quaternion_to_matrix
 from ...kinematics.euler import euler_angles_from_matrix
 from ...solvers import kick_drift
+# shared with the free top's integrators: composition weights per order, the error class, the checks of
+# t_eval and the cutting of each output interval into equal steps
 from ..free_top.integrate import SPLITTING_ORDERS, IntegrationError, _check_times, _interval_steps
 
 __all__ = ["integrate_heavy_top", "integrate_heavy_top_ensemble", "HeavyTopTrajectory", "HeavyTopEnsemble",
