@@ -17,7 +17,7 @@ from mechderive.catalog.registry import all_claims, run_claims
 from mechderive.core.display import derivation_args, show
 from mechderive.inertia import bodies, principal_axes_symbolic
 from mechderive.inertia.free_body import free_body_model
-from mechderive.inertia.parallel_axis import parallel_axis_model
+from mechderive.inertia.parallel_axis_theorem import parallel_axis_model
 from mechderive.inertia.tensor import point_mass_model
 
 args = derivation_args(__doc__.splitlines()[0])

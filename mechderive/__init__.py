@@ -35,10 +35,15 @@ _PUBLIC = {
     "angular_momentum": "mechderive.inertia.tensor",
     "body_inertia": "mechderive.inertia.bodies",
     "inertia_from_density": "mechderive.inertia.density",
-    "parallel_axis": "mechderive.inertia.parallel_axis",
+    "parallel_axis": "mechderive.inertia.parallel_axis_theorem",
     "principal_axes": "mechderive.inertia.principal",
     "check_inertia_tensor": "mechderive.inertia.validate",
     "check_principal_moments": "mechderive.inertia.validate",
+    "exact_free_top": "mechderive.systems.free_top.exact",
+    "integrate_free_top": "mechderive.systems.free_top.integrate",
+    "principal_axis_stability": "mechderive.systems.free_top.stability",
+    "linearised_eigenvalues": "mechderive.systems.free_top.stability",
+    "instability_growth_rate": "mechderive.systems.free_top.stability",
     "run_claims": "mechderive.catalog.registry",
 }
 

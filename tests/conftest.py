@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 import mpmath
@@ -12,6 +13,9 @@ import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
+
+# Compiled code goes to a disk cache; the suite uses its own, never the user's ~/.cache.
+os.environ.setdefault("MECHDERIVE_CACHE_DIR", tempfile.mkdtemp(prefix="mechderive-test-cache-"))
 
 
 @pytest.fixture(autouse=True)
@@ -27,9 +31,9 @@ def rng() -> np.random.Generator:
     return np.random.default_rng(20261121)
 
 
-def run_python(*args: str, timeout: float = 300) -> subprocess.CompletedProcess:
-    """Run ``python *args`` from the repository root with the package importable."""
-    env = dict(os.environ)
+def run_python(*args: str, timeout: float = 300, env: dict | None = None) -> subprocess.CompletedProcess:
+    """Run ``python *args`` from the repository root with the package importable (``env`` adds variables)."""
+    env = {**os.environ, **(env or {})}
     env["PYTHONPATH"] = str(ROOT) + os.pathsep + env.get("PYTHONPATH", "")
     return subprocess.run([sys.executable, *args], cwd=ROOT, env=env, capture_output=True, text=True,
                           timeout=timeout)

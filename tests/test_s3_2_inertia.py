@@ -38,7 +38,7 @@ from mechderive.inertia import (
 from mechderive.inertia import bodies as bodies_module
 from mechderive.inertia.density import density_model
 from mechderive.inertia.free_body import free_body_model
-from mechderive.inertia.parallel_axis import parallel_axis_model
+from mechderive.inertia.parallel_axis_theorem import parallel_axis_model
 from mechderive.inertia.regions import r as r_cyl
 from mechderive.inertia.regions import x as x_sym
 from mechderive.inertia.regions import z as z_sym

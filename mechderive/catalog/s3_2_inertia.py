@@ -27,7 +27,7 @@ import sympy as sp
 from ..core.symbols import t
 from ..inertia import bodies
 from ..inertia.density import DensityModel
-from ..inertia.parallel_axis import parallel_axis_model
+from ..inertia.parallel_axis_theorem import parallel_axis_model
 from ..inertia.principal import principal_axes_symbolic
 from ..inertia.regions import Region, r, varphi, x, y, z
 from ..inertia.tensor import general_inertia_symbols, point_mass_model, point_mass_tensor

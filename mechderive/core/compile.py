@@ -74,25 +74,33 @@ def compile_expressions(exprs: Any, args: Sequence[Any], *, name: str = "f") -> 
         shape = ()
         flat = [exprs]
     raw = sp.lambdify(list(args), flat, modules="numpy", cse=True)
-
-    def compiled(*values: Any) -> np.ndarray:
-        if len(values) != len(args):
-            raise TypeError(f"{name}() expected {len(args)} arguments ({', '.join(map(str, args))}), got {len(values)}")
-        vals = [np.asarray(v, dtype=float) for v in values]
-        out = raw(*vals)
-        bshape = np.broadcast_shapes(*(v.shape for v in vals)) if vals else ()
-        stacked = np.stack([np.broadcast_to(np.asarray(o, dtype=float), bshape) for o in out], axis=-1)
-        result = stacked.reshape(bshape + shape)
-        return result if result.shape else float(result)
-
-    compiled.__name__ = name
-    compiled.__doc__ = f"{name}({', '.join(map(str, args))}) -> array of shape (*broadcast, {', '.join(map(str, shape))})"
-    compiled.args = tuple(args)  # type: ignore[attr-defined]
-    compiled.shape = shape  # type: ignore[attr-defined]
+    compiled = wrap_vectorised(raw, [str(a) for a in args], shape, name)
     with _LOCK:
         _STATS["misses"] += 1
         _CACHE.setdefault(key, compiled)
         return _CACHE[key]
+
+
+def wrap_vectorised(raw: Callable[..., Any], arg_names: Sequence[str], shape: tuple[int, ...],
+                    name: str) -> Callable[..., np.ndarray]:
+    """Wrap a lambdified function returning a flat list into one returning arrays of shape (*broadcast, *shape)."""
+    nargs = len(arg_names)
+
+    def compiled(*values: Any) -> np.ndarray:
+        if len(values) != nargs:
+            raise TypeError(f"{name}() expected {nargs} arguments ({', '.join(arg_names)}), got {len(values)}")
+        vals = [np.asarray(v, dtype=float) for v in values]
+        out = raw(*vals)
+        bshape = np.broadcast_shapes(*(v.shape for v in vals)) if vals else ()
+        stacked = np.stack([np.broadcast_to(np.asarray(o, dtype=float), bshape) for o in out], axis=-1)
+        result = stacked.reshape(bshape + tuple(shape))
+        return result if result.shape else float(result)
+
+    compiled.__name__ = name
+    compiled.__doc__ = f"{name}({', '.join(arg_names)}) -> array of shape (*broadcast, {', '.join(map(str, shape))})"
+    compiled.args = tuple(arg_names)  # type: ignore[attr-defined]
+    compiled.shape = tuple(shape)  # type: ignore[attr-defined]
+    return compiled
 
 
 def compile_scalar(exprs: Any, args: Sequence[Any], *, name: str = "f") -> Callable[..., Any]:

@@ -44,7 +44,7 @@ import sympy as sp
 from ..core.model import derived
 from ..core.validate import as_finite_array
 from ..errors import DerivationError, InvalidInputError
-from .body_inertia import BodyInertia
+from .body import BodyInertia
 from .density import DensityModel
 from .regions import Region, box, r, solid_of_revolution, varphi, vartheta, z
 

@@ -24,7 +24,7 @@ import sympy as sp
 
 from ..core.model import SymbolicModel, derived
 from ..errors import InvalidInputError
-from .body_inertia import BodyInertia
+from .body import BodyInertia
 from .regions import Region
 from .tensor import point_mass_tensor
 

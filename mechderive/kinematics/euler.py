@@ -26,13 +26,11 @@ from __future__ import annotations
 import functools
 from typing import Any
 
-import numpy as np
 import sympy as sp
 
 from ..core.simplify import simplify_trig
 from ..core.model import SymbolicModel, derived
 from ..core.symbols import euler_angles, state_symbol, t, to_state_symbols
-from ..core.validate import as_finite_array, check_rotation_matrix
 
 __all__ = [
     "KinematicsModel",
@@ -182,59 +180,10 @@ def euler_rotation(phi: Any, theta: Any, psi: Any) -> sp.Matrix:
                                  simultaneous=True)
 
 
-def _angles(phi: Any, theta: Any, psi: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    return (as_finite_array(phi, "phi"), as_finite_array(theta, "theta"), as_finite_array(psi, "psi"))
-
-
-def rotation_matrix(phi: Any, theta: Any, psi: Any) -> np.ndarray:
-    """Numeric R(φ, θ, ψ) of (3.54), vectorised: arrays broadcast, result shape (..., 3, 3).
-
-    Angles in radians.
-
-    >>> np.allclose(rotation_matrix(0.3, 0.0, 0.4), rotation_matrix(0.7, 0.0, 0.0))
-    True
-    """
-    m = model()
-    syms = [state_symbol(n) for n in ("phi", "theta", "psi")]
-    return m.compile("rotation_matrix", m.state_rotation, syms)(*_angles(phi, theta, psi))
-
-
-def angular_velocity_body(phi: Any, theta: Any, psi: Any, phi_dot: Any, theta_dot: Any, psi_dot: Any) -> np.ndarray:
-    """Body components (ω1, ω2, ω3) of the angular velocity (3.58), vectorised; shape (..., 3).
-
-    Angles in radians, rates in rad/s.
-    """
-    m = model()
-    names = ("phi", "theta", "psi", "phi_dot", "theta_dot", "psi_dot")
-    f = m.compile("angular_velocity_body", m.state_angular_velocity_body.T, [state_symbol(n) for n in names])
-    vals = [as_finite_array(v, n) for v, n in zip((phi, theta, psi, phi_dot, theta_dot, psi_dot), names)]
-    return f(*vals).reshape(np.broadcast_shapes(*(v.shape for v in vals)) + (3,))
-
-
-def angular_velocity_space(phi: Any, theta: Any, psi: Any, phi_dot: Any, theta_dot: Any, psi_dot: Any) -> np.ndarray:
-    """Space components (ω̃1, ω̃2, ω̃3) = Rᵀ ω of the angular velocity, vectorised; shape (..., 3)."""
-    m = model()
-    names = ("phi", "theta", "psi", "phi_dot", "theta_dot", "psi_dot")
-    f = m.compile("angular_velocity_space", m.state_angular_velocity_space.T, [state_symbol(n) for n in names])
-    vals = [as_finite_array(v, n) for v, n in zip((phi, theta, psi, phi_dot, theta_dot, psi_dot), names)]
-    return f(*vals).reshape(np.broadcast_shapes(*(v.shape for v in vals)) + (3,))
-
-
-def euler_angles_from_matrix(R: Any) -> np.ndarray:
-    """Euler angles (φ, θ, ψ) with R(φ, θ, ψ) = R, shape (..., 3, 3) → (..., 3).
-
-    θ = arccos R33 ∈ [0, π] is computed as atan2(√(R13² + R23²), R33) so it keeps
-    full accuracy near 0 and π; φ = atan2(R31, -R32) and ψ = atan2(R13, R23), each
-    in (-π, π].  At θ = 0 or π exactly (gimbal lock) only φ ± ψ is defined: then
-    ψ = 0 is chosen and φ carries the whole angle.  Raises
-    :class:`~mechderive.errors.NotARotationError` for a matrix that is not a rotation.
-    """
-    R = check_rotation_matrix(R)
-    s = np.hypot(R[..., 0, 2], R[..., 1, 2])
-    theta = np.arctan2(s, R[..., 2, 2])
-    # sin θ below ~1e-15 carries no direction information: treat as gimbal lock.
-    lock = s < 1e-15
-    phi = np.where(lock, np.arctan2(R[..., 0, 1], R[..., 0, 0]),
-                   np.arctan2(R[..., 2, 0], -R[..., 2, 1]))
-    psi = np.where(lock, 0.0, np.arctan2(R[..., 0, 2], R[..., 1, 2]))
-    return np.stack([phi, theta, psi], axis=-1)
+# The numeric functions live in rotations.py (no SymPy needed there); re-exported here.
+from .rotations import (  # noqa: E402
+    angular_velocity_body,
+    angular_velocity_space,
+    euler_angles_from_matrix,
+    rotation_matrix,
+)

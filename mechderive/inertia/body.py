@@ -18,7 +18,7 @@ import sympy as sp
 
 from ..core.validate import as_finite_array
 from ..errors import InvalidInputError, ShapeError
-from .parallel_axis import parallel_axis, parallel_axis_symbolic
+from .parallel_axis_theorem import parallel_axis, parallel_axis_symbolic
 from .validate import check_inertia_tensor
 
 __all__ = ["BodyInertia"]

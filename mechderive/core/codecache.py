@@ -1,0 +1,185 @@
+"""Compiled functions that outlive the process: lambdify's generated source, cached on disk.
+
+A function is requested by *name* together with a *builder* that derives it
+(``build() -> (argument symbols, expressions)``).  The first request in a
+process looks in memory, then on disk; only on a miss is the builder run —
+importing SymPy and deriving — and the code that ``sympy.lambdify(..., cse=True)``
+generates is written to the cache.  A later process loads that source and
+compiles it with Python's ``compile`` in the namespace of NumPy, mpmath or math,
+so it neither imports SymPy nor derives anything.
+
+What the cache is keyed by: the function's name and target module, and a
+fingerprint of everything it was derived from — the bytes of every source file
+of the mechderive package and the versions of Python, SymPy, NumPy and mpmath.
+Any change to the package's code therefore starts a fresh cache directory.  The
+cache only ever holds code this package generated itself (never user input); it
+is safe to delete at any time (``mechderive cache --clear`` or remove the folder).
+
+Location: ``$MECHDERIVE_CACHE_DIR``, else ``$XDG_CACHE_HOME/mechderive``, else
+``~/.cache/mechderive``.  Opt out with ``MECHDERIVE_NO_DISK_CACHE=1`` or
+:func:`set_disk_cache`.
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import importlib
+import inspect
+import os
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+from typing import Any, Callable, Sequence
+
+__all__ = ["cached_lambdify", "cache_dir", "fingerprint", "set_disk_cache", "disk_cache_enabled",
+           "compile_log", "clear_memory"]
+
+_MODULES = ("numpy", "mpmath", "math")
+_MEMORY: dict[str, tuple[Callable[..., Any], dict]] = {}
+_LOCK = threading.Lock()
+_ENABLED: list[bool | None] = [None]
+#: (name, how) for every function obtained in this process, in order; how is "compiled",
+#: "disk" (loaded from the disk cache) — memory hits are not logged.
+_LOG: list[tuple[str, str, float]] = []
+
+
+def compile_log() -> list[tuple[str, str, float]]:
+    """(name, 'compiled' | 'disk', seconds) for each function obtained in this process, in order."""
+    return list(_LOG)
+
+
+def set_disk_cache(enabled: bool | None) -> None:
+    """Turn the disk cache on or off for this process (``None``: follow the environment)."""
+    _ENABLED[0] = enabled
+
+
+def disk_cache_enabled() -> bool:
+    """Whether compiled code is read from and written to disk in this process."""
+    if _ENABLED[0] is not None:
+        return _ENABLED[0]
+    return os.environ.get("MECHDERIVE_NO_DISK_CACHE", "") in ("", "0")
+
+
+def cache_dir() -> Path:
+    """The root of the disk cache (see the module docstring)."""
+    env = os.environ.get("MECHDERIVE_CACHE_DIR")
+    if env:
+        return Path(env)
+    xdg = os.environ.get("XDG_CACHE_HOME")
+    return (Path(xdg) if xdg else Path.home() / ".cache") / "mechderive"
+
+
+def _version(dist: str) -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version(dist)
+    except PackageNotFoundError:  # pragma: no cover - the runtime dependencies are installed
+        return "?"
+
+
+@functools.cache
+def fingerprint() -> str:
+    """A hash of the package's source files and the versions of Python, SymPy, NumPy and mpmath."""
+    root = Path(__file__).resolve().parent.parent
+    h = hashlib.sha256()
+    for path in sorted(root.rglob("*.py")):
+        h.update(str(path.relative_to(root)).encode())
+        h.update(path.read_bytes())
+    h.update(sys.version.encode())
+    for dist in ("sympy", "numpy", "mpmath"):
+        h.update(f"{dist}={_version(dist)}".encode())
+    return h.hexdigest()[:20]
+
+
+def clear_memory() -> None:
+    """Forget the functions held in memory (the disk cache is untouched); for tests."""
+    with _LOCK:
+        _MEMORY.clear()
+
+
+def _path(name: str, module: str) -> Path:
+    safe = "".join(c if c.isalnum() or c in "._-" else "_" for c in name)
+    return cache_dir() / fingerprint() / f"{safe}.{module}.py"
+
+
+def _load(path: Path, module: str) -> tuple[Callable[..., Any], dict] | None:
+    try:
+        source = path.read_text()
+    except OSError:
+        return None
+    meta = {}
+    for line in source.splitlines():
+        if line.startswith("# meta "):
+            key, _, value = line[7:].partition("=")
+            meta[key.strip()] = value.strip()
+    namespace = dict(vars(importlib.import_module(module)))
+    # Our own generated code, written by _store below (see the module docstring).
+    exec(compile(source, str(path), "exec"), namespace)  # noqa: S102
+    return namespace["_lambdifygenerated"], meta
+
+
+def _store(path: Path, source: str, meta: dict) -> None:
+    header = "".join(f"# meta {k} = {v}\n" for k, v in meta.items())
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True, mode=0o700)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
+        with os.fdopen(fd, "w") as fh:
+            fh.write("# generated by mechderive.core.codecache from sympy.lambdify; safe to delete\n")
+            fh.write(header + source)
+        os.replace(tmp, path)  # atomic: concurrent processes see the old file or the new one
+    except OSError:
+        pass  # a read-only home just means no disk cache
+
+
+def cached_lambdify(name: str, build: Callable[[], tuple[Sequence[Any], Any]], *,
+                    module: str = "numpy") -> tuple[Callable[..., Any], dict]:
+    """The function ``name`` for ``module`` ('numpy', 'mpmath' or 'math'), and its metadata.
+
+    ``build()`` returns (argument symbols, expressions); the expressions may be one
+    expression, a Matrix or a (nested) list — they are flattened row-major, and the
+    function returns a list.  The metadata has ``shape`` (of the expressions) and
+    ``args`` (the argument names, comma-separated).
+    """
+    if module not in _MODULES:
+        raise ValueError(f"expected module one of {_MODULES}, got {module!r}")
+    key = f"{name}|{module}"
+    with _LOCK:
+        hit = _MEMORY.get(key)
+    if hit is not None:
+        return hit
+    start = time.perf_counter()
+    path = _path(name, module) if disk_cache_enabled() else None
+    loaded = _load(path, module) if path is not None and path.exists() else None
+    if loaded is not None:
+        how = "disk"
+    else:
+        import numpy as np
+        import sympy as sp
+
+        args, exprs = build()
+        if isinstance(exprs, sp.MatrixBase):
+            shape, flat = exprs.shape, list(exprs)
+        elif isinstance(exprs, (list, tuple)):
+            arr = np.array(exprs, dtype=object)
+            shape, flat = arr.shape, list(arr.ravel())
+        else:
+            shape, flat = (), [exprs]
+        func = sp.lambdify(list(args), flat, modules=module, cse=True)
+        meta = {"shape": ",".join(map(str, shape)), "args": ",".join(str(a) for a in args)}
+        if path is not None:
+            _store(path, inspect.getsource(func), meta)
+        loaded, how = (func, meta), "compiled"
+    with _LOCK:
+        _MEMORY.setdefault(key, loaded)
+        _LOG.append((name, how, time.perf_counter() - start))
+        return _MEMORY[key]
+
+
+def shape_of(meta: dict) -> tuple[int, ...]:
+    """The expressions' shape recorded in ``meta``."""
+    text = meta.get("shape", "")
+    return tuple(int(x) for x in text.split(",") if x)

@@ -1,0 +1,89 @@
+"""Numeric rotations and angular velocities in Euler angles — no SymPy at import or on a warm cache.
+
+These evaluate R(φ, θ, ψ) = R3(ψ) R1(θ) R3(φ) (3.54) and the angular velocity (3.58)
+as *derived* in :mod:`mechderive.kinematics.euler`; the derived expressions are compiled
+once (lambdify with common-subexpression elimination) and the generated code is kept
+in the disk cache (:mod:`mechderive.core.codecache`), so a later process evaluates
+them without importing SymPy.  Conventions as in :mod:`mechderive.kinematics.euler`.
+"""
+
+from __future__ import annotations
+
+import functools
+from typing import Any, Callable
+
+import numpy as np
+
+from ..core.codecache import cached_lambdify, shape_of
+from ..core.compile import wrap_vectorised
+from ..core.validate import as_finite_array, check_rotation_matrix
+
+__all__ = ["rotation_matrix", "angular_velocity_body", "angular_velocity_space", "euler_angles_from_matrix"]
+
+_RATES = ("phi", "theta", "psi", "phi_dot", "theta_dot", "psi_dot")
+
+
+def _build(quantity: str, names: tuple[str, ...]) -> Callable[[], tuple]:
+    def build():
+        from ..core.symbols import state_symbol
+        from . import euler
+
+        expr = getattr(euler.model(), quantity)
+        return [state_symbol(n) for n in names], expr
+    return build
+
+
+@functools.cache
+def _function(quantity: str, names: tuple[str, ...]) -> Callable[..., np.ndarray]:
+    raw, meta = cached_lambdify(f"kinematics.{quantity}", _build(quantity, names), module="numpy")
+    return wrap_vectorised(raw, list(names), shape_of(meta), quantity)
+
+
+def rotation_matrix(phi: Any, theta: Any, psi: Any) -> np.ndarray:
+    """Numeric R(φ, θ, ψ) of (3.54), vectorised: arrays broadcast, result shape (..., 3, 3).
+
+    Angles in radians.
+
+    >>> np.allclose(rotation_matrix(0.3, 0.0, 0.4), rotation_matrix(0.7, 0.0, 0.0))
+    True
+    """
+    f = _function("state_rotation", ("phi", "theta", "psi"))
+    return f(as_finite_array(phi, "phi"), as_finite_array(theta, "theta"), as_finite_array(psi, "psi"))
+
+
+def _rates(quantity: str, values: tuple) -> np.ndarray:
+    vals = [as_finite_array(v, n) for v, n in zip(values, _RATES)]
+    out = _function(quantity, _RATES)(*vals)
+    return np.asarray(out).reshape(np.broadcast_shapes(*(v.shape for v in vals)) + (3,))
+
+
+def angular_velocity_body(phi: Any, theta: Any, psi: Any, phi_dot: Any, theta_dot: Any, psi_dot: Any) -> np.ndarray:
+    """Body components (ω1, ω2, ω3) of the angular velocity (3.58), vectorised; shape (..., 3).
+
+    Angles in radians, rates in rad/s.
+    """
+    return _rates("state_angular_velocity_body", (phi, theta, psi, phi_dot, theta_dot, psi_dot))
+
+
+def angular_velocity_space(phi: Any, theta: Any, psi: Any, phi_dot: Any, theta_dot: Any, psi_dot: Any) -> np.ndarray:
+    """Space components (ω̃1, ω̃2, ω̃3) = Rᵀ ω of the angular velocity, vectorised; shape (..., 3)."""
+    return _rates("state_angular_velocity_space", (phi, theta, psi, phi_dot, theta_dot, psi_dot))
+
+
+def euler_angles_from_matrix(R: Any) -> np.ndarray:
+    """Euler angles (φ, θ, ψ) with R(φ, θ, ψ) = R, shape (..., 3, 3) → (..., 3).
+
+    θ = arccos R33 ∈ [0, π] is computed as atan2(√(R13² + R23²), R33) so it keeps
+    full accuracy near 0 and π; φ = atan2(R31, -R32) and ψ = atan2(R13, R23), each
+    in (-π, π].  At θ = 0 or π exactly (gimbal lock) only φ ± ψ is defined: then
+    ψ = 0 is chosen and φ carries the whole angle.  Raises
+    :class:`~mechderive.errors.NotARotationError` for a matrix that is not a rotation.
+    """
+    R = check_rotation_matrix(R)
+    s = np.hypot(R[..., 0, 2], R[..., 1, 2])
+    theta = np.arctan2(s, R[..., 2, 2])
+    # sin θ below ~1e-15 carries no direction information: treat as gimbal lock.
+    lock = s < 1e-15
+    phi = np.where(lock, np.arctan2(R[..., 0, 1], R[..., 0, 0]), np.arctan2(R[..., 2, 0], -R[..., 2, 1]))
+    psi = np.where(lock, 0.0, np.arctan2(R[..., 0, 2], R[..., 1, 2]))
+    return np.stack([phi, theta, psi], axis=-1)
