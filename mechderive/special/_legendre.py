@@ -12,7 +12,7 @@ Each ``half`` value is I(ψ) for |ψ| <= π/2 written as s·G(c², ...) with G e
 from __future__ import annotations
 
 import numpy as np
-from scipy.special import elliprc, elliprd, elliprf, elliprj
+from ._carlson import elliprc, elliprd, elliprf, elliprj
 
 from ..errors import InvalidInputError
 from ._doubledouble import PI_HI, PI_LO, two_prod, two_sum

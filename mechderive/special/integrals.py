@@ -41,7 +41,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from scipy.special import elliprd, elliprf, elliprj
+from ._carlson import elliprd, elliprf, elliprj
 
 from ..core.validate import as_finite_array
 from ..errors import InvalidInputError
