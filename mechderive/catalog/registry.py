@@ -30,9 +30,11 @@ SECTION_MODULES = (
     "mechderive.catalog.s3_3_rigid_motion",
     "mechderive.catalog.s3_3_euler_equations",
     "mechderive.catalog.s3_4_free_tops",
+    "mechderive.catalog.s3_4_exact_motion",
     "mechderive.catalog.s3_5_euler_angles",
     "mechderive.catalog.s3_5_3_free_symmetric_top",
     "mechderive.catalog.s3_6_heavy_top",
+    "mechderive.catalog.s3_7_deformable",
 )
 
 
