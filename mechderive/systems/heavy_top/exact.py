@@ -1,0 +1,483 @@
+"""The heavy symmetric top's motion in closed form (section 3.6).
+
+What is evaluated (derivation in :mod:`.exact_model` and :mod:`.model`)
+----------------------------------------------------------------------
+With u = cos θ, the derived cubic u̇² = f(u) = β (u - u1)(u - u2)(u - u3) has
+u1 ≤ u(t) ≤ u2 ≤ 1 ≤ u3, and
+
+    u(t) = u1 + (u2 - u1) sn²(v | m),    v = κ t + v0,
+    κ² = β (u3 - u1) / 4,   m = (u2 - u1)/(u3 - u1),   1 - m = (u3 - u2)/(u3 - u1),
+
+so the nutation period is 2K(m)/κ.  θ is formed without cancellation from
+1 - u = (1 - u2) + (u2 - u1) cn² and 1 + u = (1 + u1) + (u2 - u1) sn².
+The precession and spin angles integrate the partial fractions of φ̇(u) and
+ψ̇(u) (3.74)–(3.75):
+
+    φ(t) - φ0 = (c0/κ)(v - v0) + Σ_i (c_i/κ) [Π(n_i; am v | m) - Π(n_i; am v0 | m)],
+
+with the characteristics n₊ = (u2 - u1)/(1 - u1) and n₋ = -(u2 - u1)/(1 + u1).
+
+Long times: every constant is computed once at 40 digits from the exact binary
+inputs; v is formed and reduced by the period 2K in double-double, giving an exact
+count j of nutation periods, and φ, ψ gain j·Δφ, j·Δψ (double-double, reduced
+mod 2π for R).  Evaluating at 10⁶ nutation periods therefore costs and errs as at
+one, apart from the rounding of t itself.
+
+Boundary cases: a double root u1 = u2 (uniform precession, including the sleeping
+top at θ = 0) is a steady motion with constant rates; near it the amplitude u2 - u1
+and m are small but the formulas hold.  When the apex passes exactly through the
+pole (u2 = 1, so b = a) the n₊ term has a zero coefficient and is dropped; when it
+passes *near* the pole, n₊ → 1 and φ turns by almost π in a short time — correct,
+but φ, ψ are then ill-conditioned functions of time (their sum stays accurate); the
+``conditioning`` attribute reports 1/(1 - n₊), the factor by which errors in t are
+amplified in φ there.
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass, field
+from typing import Any, Mapping
+
+import mpmath
+import numpy as np
+
+from ...core.validate import as_finite_array
+from ...errors import DerivationError, InvalidInputError
+from ...core.codecache import cached_lambdify
+from ...kinematics.rotations import angular_velocity_body, rotation_matrix
+from ...special._doubledouble import dd_add, two_prod
+from ..free_top.exact import _DD, _mod_two_pi
+from .parameters import check_initial, check_parameters
+
+__all__ = ["HeavyTopSolution", "exact_heavy_top"]
+
+_DPS = 40
+
+
+@functools.cache
+def _nutation_functions():
+    """The derived constants of u(t) as mpmath functions, compiled once (through the disk cache)."""
+    def build_state():
+        from . import model as hm
+
+        cfs = hm.model().constants_from_state
+        return [*hm.PARAMETERS, *hm.STATE], [cfs[k] for k in (hm.a, hm.b, hm.alpha, hm.beta)]
+
+    def build_f():
+        from . import model as hm
+
+        return [hm.a, hm.b, hm.alpha, hm.beta], list(hm.model().f_coefficients)
+
+    def build_nutation():
+        from . import exact_model as em
+        from . import model as hm
+
+        nut = em.model().nutation_constants
+        return [hm.beta, em.u1, em.u2, em.u3], [nut["kappa2"], nut["m"], nut["m1"]]
+
+    state, _ = cached_lambdify("heavy_top.constants_from_state", build_state, module="mpmath")
+    cubic, _ = cached_lambdify("heavy_top.f_coefficients", build_f, module="mpmath")
+    nutation, _ = cached_lambdify("heavy_top.nutation_constants", build_nutation, module="mpmath")
+    return {"state": state, "f": cubic, "nutation": nutation}
+
+
+@functools.cache
+def _angle_functions():
+    """Partial fractions of φ̇ and ψ̇ along u(t) — derived only when φ or ψ is asked for.
+
+    Each is an mpmath function of (I1, I3, a, b, u1, u2, u3) returning [c0, c_1, n_1, c_2, n_2, ...].
+    """
+    def build(which: str):
+        def inner():
+            from . import exact_model as em
+            from . import model as hm
+
+            fr = getattr(em.model(), which)
+            flat = [fr["c0"]] + [x for c, n in fr["terms"] for x in (c, n)]
+            return [hm.I1, hm.I3, hm.a, hm.b, em.u1, em.u2, em.u3], flat
+        return inner
+
+    return {name: cached_lambdify(f"heavy_top.{which}", build(which), module="mpmath")[0]
+            for name, which in (("phi", "precession_fractions"), ("psi", "spin_fractions"))}
+
+
+@dataclass(frozen=True)
+class _Angle:
+    """The closed form of one precession-type angle: start, linear part, Π terms, advance per period."""
+
+    start: float
+    c0_over_kappa: float
+    terms: tuple[tuple[float, float, float], ...]  # (c_i/κ, n_i, Π(n_i; am v0 | m))
+    per_period: _DD | None
+    rate: float  # for steady motion: the constant rate
+
+
+class _Pass:
+    """One evaluation at an array of times: shared intermediates computed at most once, on demand.
+
+    ``computed`` lists what was evaluated, in order (the laziness tests read it).
+    """
+
+    def __init__(self, sol: "HeavyTopSolution", t: np.ndarray) -> None:
+        self.sol, self.t = sol, t
+        self.computed: list[str] = []
+        self._cache: dict[str, Any] = {}
+
+    def _get(self, key: str, make):
+        if key not in self._cache:
+            self._cache[key] = make()
+            self.computed.append(key)
+        return self._cache[key]
+
+    def phase(self):
+        return self._get("phase", lambda: self.sol._phase(self.t))
+
+    def jacobi(self):
+        from ...special.jacobi import jacobi_sn_cn_dn
+
+        def make():
+            sn, cn, dn = jacobi_sn_cn_dn(self.phase()[1], self.sol.m, m1=self.sol.m1)
+            return np.asarray(sn), np.asarray(cn), np.asarray(dn)
+        return self._get("jacobi", make)
+
+    def amplitude(self):
+        from ...special.jacobi import jacobi_am
+
+        return self._get("am", lambda: np.asarray(jacobi_am(self.phase()[1], self.sol.m, m1=self.sol.m1)))
+
+    def pi(self, n: float):
+        from ...special.integrals import elliptic_pi_incomplete
+
+        return self._get(f"pi({n!r})", lambda: np.asarray(
+            elliptic_pi_incomplete(n, self.amplitude(), self.sol.m, m1=self.sol.m1)))
+
+    def one_minus_plus_u(self):
+        def make():
+            sn, cn, _ = self.jacobi()
+            return self.sol._one_minus_u2 + self.sol._amp * cn**2, self.sol._one_plus_u1 + self.sol._amp * sn**2
+        return self._get("1-u,1+u", make)
+
+    def angle(self, spec: _Angle, *, reduced: bool) -> np.ndarray:
+        sol, t = self.sol, self.t
+        if sol.kind == "steady":
+            return spec.start + (_mod_two_pi(spec.rate, t) if reduced else spec.rate * t)
+        j, r = self.phase()
+        value = spec.start + spec.c0_over_kappa * (r - sol._v0.hi - sol._v0.lo)
+        for c, n, pi0 in spec.terms:
+            value = value + c * (self.pi(n) - pi0)
+        if spec.per_period is None:
+            return value
+        if reduced:
+            return value + _mod_two_pi(spec.per_period, j)
+        return value + j * (spec.per_period.hi + spec.per_period.lo)
+
+    def rate(self, spec: _Angle) -> np.ndarray:
+        sol = self.sol
+        if sol.kind == "steady":
+            return np.full(self.t.shape, spec.rate)
+        sn = self.jacobi()[0]
+        kappa = sol._kappa.hi + sol._kappa.lo
+        value = np.full(self.t.shape, spec.c0_over_kappa * kappa)
+        for c, n, _ in spec.terms:
+            value = value + c * kappa / (1 - n * sn**2)
+        return value
+
+
+#: The quantities :meth:`HeavyTopSolution.evaluate` knows (each an array over t; R is (..., 3, 3),
+#: apex and omega (..., 3)).
+QUANTITIES = ("u", "theta", "theta_dot", "phi", "psi", "phi_wrapped", "psi_wrapped", "phi_dot", "psi_dot",
+              "R", "apex", "omega")
+
+
+@dataclass(frozen=True)
+class HeavyTopSolution:
+    """The closed-form motion of one heavy symmetric top; methods take arrays of times (s).
+
+    Attributes: ``kind`` ('nutating' or 'steady'), ``roots`` (u1, u2, u3), ``m``, ``m1``,
+    ``nutation_period`` (s; nan when steady), ``motion_class`` (see :func:`classify`),
+    ``energy``, ``p_phi``, ``p_psi`` (the conserved quantities, from the initial state),
+    ``conditioning`` (1/(1 - n₊): error amplification in φ, ψ near the pole).
+
+    Only what is asked for is computed: θ(t) needs sn, cn of the reduced phase; φ(t) and ψ(t)
+    need the amplitude and Π, and their constants (including the partial fractions of φ̇, ψ̇)
+    are derived and computed on the first request for either.
+    """
+
+    parameters: dict
+    initial: dict
+    kind: str
+    roots: tuple[float, float, float]
+    m: float
+    m1: float
+    nutation_period: float
+    conditioning: float
+    motion_class: str
+    energy: float
+    p_phi: float
+    p_psi: float
+    _kappa: _DD
+    _v0: _DD
+    _period: _DD | None  # 2K in v
+    _u1: float
+    _amp: float  # u2 - u1
+    _one_minus_u2: float
+    _one_plus_u1: float
+    _theta_const: float
+    _mp: dict = field(default_factory=dict, repr=False)  # 40-digit setup values for the lazy angle constants
+
+    @functools.cached_property
+    def _angles(self) -> dict[str, _Angle]:
+        with mpmath.workdps(_DPS):
+            return _angle_setup(self)
+
+    # --- the phase ----------------------------------------------------------------------------
+
+    def _phase(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(j, r): v(t) = κt + v0 = j·2K + r with integer j and r in [0, 2K), in double-double."""
+        hi, lo = two_prod(self._kappa.hi, t)
+        lo = lo + self._kappa.lo * t
+        hi, lo = dd_add(hi, lo, self._v0.hi, self._v0.lo)
+        if self._period is None:
+            return np.zeros_like(t), hi + lo
+        j = np.floor(hi / self._period.hi)
+        ph, pl = two_prod(j, self._period.hi)
+        pl = pl + j * self._period.lo
+        rh, rl = dd_add(hi, lo, -ph, -pl)
+        r = rh + rl
+        low = r < 0
+        r, j = np.where(low, r + self._period.hi, r), np.where(low, j - 1, j)
+        high = r >= self._period.hi
+        r, j = np.where(high, r - self._period.hi, r), np.where(high, j + 1, j)
+        return j, r
+
+    # --- one pass over many quantities ---------------------------------------------------------
+
+    def evaluate(self, t: Any, quantities: Any) -> dict[str, np.ndarray]:
+        """The requested quantities (names from :data:`QUANTITIES`) at times ``t``, sharing intermediates.
+
+        >>> top = exact_heavy_top(dict(I1=1.0, I3=0.5, M=0.1, g=10.0, l=1.0),
+        ...                       dict(theta=0.5, phi=0.0, psi=0.0, theta_dot=0.0, phi_dot=0.0, psi_dot=5.0))
+        >>> out = top.evaluate([0.0, 1.0], ["theta"])
+        >>> round(float(out["theta"][0]), 12)
+        0.5
+        """
+        return self._evaluate(as_finite_array(t, "t"), quantities)[0]
+
+    def _evaluate(self, t: np.ndarray, quantities: Any) -> tuple[dict[str, np.ndarray], _Pass]:
+        names = list(quantities)
+        unknown = [q for q in names if q not in QUANTITIES]
+        if unknown:
+            raise InvalidInputError(f"unknown quantity {unknown[0]!r}: expected one of {', '.join(QUANTITIES)}")
+        ps = _Pass(self, t)
+        out: dict[str, np.ndarray] = {}
+        for q in names:
+            out[q] = self._quantity(ps, q)
+        return out, ps
+
+    def _quantity(self, ps: _Pass, q: str) -> np.ndarray:
+        t = ps.t
+        steady = self.kind == "steady"
+        if q == "u":
+            if steady:
+                return np.full(t.shape, np.cos(self._theta_const))
+            return self._u1 + self._amp * ps.jacobi()[0] ** 2
+        if q == "theta":
+            if steady:
+                return np.full(t.shape, self._theta_const)
+            one_minus, one_plus = ps.one_minus_plus_u()
+            return 2 * np.arctan2(np.sqrt(one_minus), np.sqrt(one_plus))
+        if q == "theta_dot":
+            if steady:
+                return np.zeros(t.shape)
+            sn, cn, dn = ps.jacobi()
+            one_minus, one_plus = ps.one_minus_plus_u()
+            kappa = self._kappa.hi + self._kappa.lo
+            return -2 * kappa * self._amp * sn * cn * dn / np.sqrt(one_minus * one_plus)
+        if q in ("phi", "psi", "phi_wrapped", "psi_wrapped"):
+            spec = self._angles[q[:3]]
+            if q.endswith("wrapped"):
+                x = ps.angle(spec, reduced=True)
+                return x - 2 * np.pi * np.round(x / (2 * np.pi))
+            return ps.angle(spec, reduced=False)
+        if q in ("phi_dot", "psi_dot"):
+            return ps.rate(self._angles[q[:3]])
+        if q == "R":
+            return rotation_matrix(ps.angle(self._angles["phi"], reduced=True), self._quantity(ps, "theta"),
+                                   ps.angle(self._angles["psi"], reduced=True))
+        if q == "apex":
+            th = self._quantity(ps, "theta")
+            ph = ps.angle(self._angles["phi"], reduced=True)
+            return np.stack([np.sin(th) * np.sin(ph), -np.sin(th) * np.cos(ph), np.cos(th)], axis=-1)
+        if q == "omega":
+            return angular_velocity_body(ps.angle(self._angles["phi"], reduced=True), self._quantity(ps, "theta"),
+                                         ps.angle(self._angles["psi"], reduced=True), self._quantity(ps, "phi_dot"),
+                                         self._quantity(ps, "theta_dot"), self._quantity(ps, "psi_dot"))
+        raise InvalidInputError(f"unknown quantity {q!r}: expected one of {', '.join(QUANTITIES)}")
+
+    # --- single quantities ------------------------------------------------------------------------
+
+    def theta(self, t: Any) -> np.ndarray:
+        """The nutation angle θ(t) (rad), from u(t) without cancellation near θ = 0 or π."""
+        return self.evaluate(t, ["theta"])["theta"]
+
+    def u(self, t: Any) -> np.ndarray:
+        """u(t) = cos θ(t) = u1 + (u2 - u1) sn²(κt + v0 | m) (3.71)."""
+        return self.evaluate(t, ["u"])["u"]
+
+    def theta_dot(self, t: Any) -> np.ndarray:
+        """θ̇ = -u̇ / sin θ, with u̇ = 2κ(u2 - u1) sn cn dn (rad/s)."""
+        return self.evaluate(t, ["theta_dot"])["theta_dot"]
+
+    def phi(self, t: Any, *, wrapped: bool = False) -> np.ndarray:
+        """The precession angle φ(t) (rad): continuous (not wrapped), or in (-π, π] with ``wrapped=True``.
+
+        The continuous angle is a float of size ~|φ̇| t, so its own rounding (ulp) grows with t
+        (2.3e-13 at |φ| ~ 2000); the wrapped angle is reduced in double-double and keeps ~1e-15.
+        """
+        name = "phi_wrapped" if wrapped else "phi"
+        return self.evaluate(t, [name])[name]
+
+    def psi(self, t: Any, *, wrapped: bool = False) -> np.ndarray:
+        """The spin angle ψ(t) (rad): continuous, or in (-π, π] with ``wrapped=True`` (see :meth:`phi`)."""
+        name = "psi_wrapped" if wrapped else "psi"
+        return self.evaluate(t, [name])[name]
+
+    def phi_dot(self, t: Any) -> np.ndarray:
+        """φ̇(t) = (b - a u)/(1 - u²) (3.74), from its partial fractions (rad/s)."""
+        return self.evaluate(t, ["phi_dot"])["phi_dot"]
+
+    def psi_dot(self, t: Any) -> np.ndarray:
+        """ψ̇(t) (3.75), from its partial fractions (rad/s)."""
+        return self.evaluate(t, ["psi_dot"])["psi_dot"]
+
+    def rotation(self, t: Any) -> np.ndarray:
+        """The chapter's R(φ, θ, ψ) at times t (φ, ψ reduced mod 2π exactly), shape (..., 3, 3)."""
+        return self.evaluate(t, ["R"])["R"]
+
+    def apex(self, t: Any) -> np.ndarray:
+        """The symmetry axis e3 in space components (a point on the unit sphere), shape (..., 3)."""
+        return self.evaluate(t, ["apex"])["apex"]
+
+
+def classify(u1: float, u2: float, a: float, b: float, *, rtol: float = 1e-12) -> str:
+    """The chapter's motion classes (figure 44) from the sign of φ̇ ∝ b - a u at the turning points.
+
+    Returns ``'uniform precession'`` (u1 = u2), ``'monotonic precession'`` (φ̇ keeps its sign),
+    ``'looping'`` (φ̇ changes sign), or ``'cusps'`` (φ̇ = 0 at a turning point).
+    """
+    if u2 - u1 <= rtol:
+        return "uniform precession"
+    g1, g2 = b - a * u1, b - a * u2
+    scale = max(abs(a), abs(b), 1e-300)
+    if min(abs(g1), abs(g2)) <= rtol * scale:
+        return "cusps"
+    return "monotonic precession" if g1 * g2 > 0 else "looping"
+
+
+def exact_heavy_top(parameters: Mapping[str, float], initial: Mapping[str, float]) -> HeavyTopSolution:
+    """The closed-form motion of a heavy symmetric top.
+
+    Parameters
+    ----------
+    parameters : ``I1 I3 M g l`` — I1 = I2 and I3 principal moments about the pivot (kg m²),
+        mass (kg), gravity (m/s²), pivot-to-centre-of-mass distance (m).
+    initial : ``theta phi psi theta_dot phi_dot psi_dot`` (rad, rad/s) at t = 0.
+
+    >>> top = exact_heavy_top(dict(I1=1.0, I3=0.5, M=0.1, g=10.0, l=1.0),
+    ...                       dict(theta=0.5, phi=0.0, psi=0.0, theta_dot=0.0, phi_dot=0.0, psi_dot=5.0))
+    >>> round(top.nutation_period, 4), top.motion_class
+    (3.5177, 'cusps')
+    """
+    params = check_parameters(parameters)
+    init = check_initial(initial)
+    with mpmath.workdps(_DPS):
+        return _setup(params, init)
+
+
+def _real_roots(coeffs: list) -> list:
+    roots = mpmath.polyroots(coeffs, maxsteps=200, extraprec=4 * _DPS)
+    tiny = mpmath.mpf(10) ** (-_DPS // 2)
+    real = sorted(mpmath.re(r) for r in roots if abs(mpmath.im(r)) <= tiny * (1 + abs(r)))
+    if len(real) != 3:
+        raise DerivationError(f"expected three real roots of f(u), got {roots}")
+    return real
+
+
+def _setup(params: dict, init: dict) -> HeavyTopSolution:
+    f = _nutation_functions()
+    mp = mpmath.mpf
+    P = [mp(params[k]) for k in ("I1", "I3", "M", "g", "l")]
+    S = [mp(init[k]) for k in ("theta", "theta_dot", "phi_dot", "psi_dot")]
+    a, b, alpha, beta = f["state"](*P, *S)
+    I1, I3 = P[0], P[1]
+    th0 = S[0]
+    u0 = mpmath.cos(th0)
+    energy = (I1 * (S[1] ** 2 + S[2] ** 2 * mpmath.sin(th0) ** 2) + I3 * (S[3] + S[2] * u0) ** 2) / 2 \
+        + P[2] * P[3] * P[4] * u0
+    common = dict(parameters=dict(params), initial=dict(init), energy=float(energy), p_phi=float(I1 * b),
+                  p_psi=float(I1 * a))
+    u_1, u_2, u_3 = _real_roots(f["f"](a, b, alpha, beta))
+    # u0 lies in [u1, u2] up to the roots' own accuracy (40 digits); snap it in.
+    u_2, u_1 = max(u_2, u0), min(u_1, u0)
+    amp = u_2 - u_1
+    scale = mp(10) ** (-_DPS + 8)
+    roots_f = (float(u_1), float(u_2), float(u_3))
+    if amp <= scale or (mpmath.sin(th0) == 0 and S[1] == 0):
+        return HeavyTopSolution(
+            kind="steady", roots=roots_f, m=0.0, m1=1.0, nutation_period=float("nan"), conditioning=1.0,
+            motion_class="uniform precession", _kappa=_DD(0.0, 0.0), _v0=_DD(0.0, 0.0), _period=None,
+            _u1=float(u0), _amp=0.0, _one_minus_u2=float(1 - u0), _one_plus_u1=float(1 + u0),
+            _theta_const=float(th0), _mp=dict(steady=True), **common)
+    roots = (u_1, u_2, u_3)
+    kappa2, m, m1 = f["nutation"](beta, *roots)
+    kappa = mpmath.sqrt(kappa2)
+    s0 = min(max((u0 - u_1) / amp, mp(0)), mp(1))
+    u_dot0 = -mpmath.sin(th0) * S[1]
+    A0 = mpmath.sign(u_dot0) * mpmath.asin(mpmath.sqrt(s0)) if u_dot0 != 0 else \
+        (mpmath.pi / 2 if s0 > mp(1) / 2 else mp(0))
+    v0 = mpmath.ellipf(A0, m)
+    K = mpmath.ellipk(m) if m1 != 0 else mpmath.inf
+    period = None if m1 == 0 else _DD.of(2 * K)
+    n_plus = (u_2 - u_1) / (1 - u_1)
+    return HeavyTopSolution(
+        kind="nutating", roots=roots_f, m=float(m), m1=float(m1),
+        nutation_period=float(2 * K / kappa) if period is not None else float("inf"),
+        conditioning=float(1 / (1 - n_plus)) if n_plus < 1 else float("inf"),
+        motion_class=classify(float(u_1), float(u_2), float(a), float(b)),
+        _kappa=_DD.of(kappa), _v0=_DD.of(v0), _period=period, _u1=float(u_1), _amp=float(amp),
+        _one_minus_u2=float(1 - u_2), _one_plus_u1=float(1 + u_1), _theta_const=float(th0),
+        _mp=dict(steady=False, I1=I1, I3=I3, a=a, b=b, roots=roots, kappa=kappa, m=m, A0=A0, K=K,
+                 scale=scale), **common)
+
+
+def _angle_setup(sol: HeavyTopSolution) -> dict[str, _Angle]:
+    """Constants of φ(t) and ψ(t) at 40 digits, for the first request of either."""
+    if sol.kind == "steady":
+        return {k: _Angle(sol.initial[k], 0.0, (), None, sol.initial[k + "_dot"]) for k in ("phi", "psi")}
+    v = sol._mp
+    f = _angle_functions()
+    frac_args = (v["I1"], v["I3"], v["a"], v["b"], *v["roots"])
+    kappa, m, A0, K = v["kappa"], v["m"], v["A0"], v["K"]
+    from ...special.integrals import elliptic_pi_incomplete
+
+    complete: dict = {}  # φ and ψ share their characteristics n±: one complete Π each
+    out = {}
+    for name in ("phi", "psi"):
+        flat = f[name](*frac_args)
+        c0 = flat[0]
+        terms, per = [], (c0 / kappa) * 2 * K if sol._period is not None else None
+        for c, n in zip(flat[1::2], flat[2::2]):
+            if abs(c) <= v["scale"] * (abs(v["a"]) + abs(v["b"]) + 1):
+                continue  # e.g. b = a when the apex passes through the pole: the n₊ term is absent
+            # Π(n; am v0) is an O(1) offset: double precision is enough.  The advance per period
+            # multiplies j up to ~1e15, so the complete Π is taken at 40 digits.
+            pi0 = float(elliptic_pi_incomplete(float(n), float(A0), sol.m, m1=sol.m1))
+            terms.append((float(c / kappa), float(n), pi0))
+            if per is not None:
+                if n not in complete:
+                    complete[n] = mpmath.ellippi(n, m)
+                per += (c / kappa) * 2 * complete[n]
+        out[name] = _Angle(float(sol.initial[name]), float(c0 / kappa), tuple(terms),
+                           None if per is None else _DD.of(per), 0.0)
+    return out
