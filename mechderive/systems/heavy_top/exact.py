@@ -48,7 +48,7 @@ from ...core.codecache import cached_lambdify
 from ...kinematics.rotations import angular_velocity_body, rotation_matrix
 from ...special._doubledouble import dd_add, two_prod
 from ..free_top.exact import _DD, _mod_two_pi
-from .parameters import check_initial, check_parameters
+from .parameters import check_initial, check_params
 
 __all__ = ["HeavyTopSolution", "exact_heavy_top"]
 
@@ -389,8 +389,14 @@ def exact_heavy_top(parameters: Mapping[str, float], initial: Mapping[str, float
     >>> round(top.nutation_period, 4), top.motion_class
     (3.5177, 'cusps')
     """
-    params = check_parameters(parameters)
+    params = check_params(parameters)
     init = check_initial(initial)
+    for k in ("g", "l"):
+        if not params[k] > 0:
+            raise InvalidInputError(f"expected params['{k}'] > 0 for the heavy top's closed form (with M g l = 0 "
+                                    f"the top is free: use the free_top system), got {params[k]:g}")
+    if any(np.ndim(v) for v in (*params.values(), *init.values())):
+        raise InvalidInputError("expected scalar parameters and initial values for one closed-form motion, got arrays")
     with mpmath.workdps(_DPS):
         return _setup(params, init)
 
