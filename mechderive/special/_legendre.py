@@ -116,9 +116,15 @@ def pi_half(n, s, c, d2, m):
     an = np.where(neg, -n, 1.0)
     pp = one_minus_n_s2(n, s, c)
     with np.errstate(all="ignore"):
+        # Only the branch in use is evaluated (each costs an R_J per point); both when mixed.
+        if np.all(neg):
+            q = 1.0 + m * s2 / an
+            return s * elliprc(c2 * d2, pp * q) + m * s * s2 / (3.0 * an) * elliprj(c2, d2, 1.0, q)
+        direct = s * elliprf(c2, d2, 1.0) + n / 3.0 * s * s2 * elliprj(c2, d2, 1.0, pp)
+        if not np.any(neg):
+            return direct
         q = 1.0 + m * s2 / an
         transformed = s * elliprc(c2 * d2, pp * q) + m * s * s2 / (3.0 * an) * elliprj(c2, d2, 1.0, q)
-        direct = s * elliprf(c2, d2, 1.0) + n / 3.0 * s * s2 * elliprj(c2, d2, 1.0, pp)
     return np.where(neg, transformed, direct)
 
 

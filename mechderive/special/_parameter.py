@@ -23,6 +23,8 @@ j·2K costs ~|u|·1e-32 instead of j·ulp(2K).
 
 from __future__ import annotations
 
+import functools
+
 from dataclasses import dataclass
 from typing import Any
 
@@ -99,7 +101,23 @@ def parameter(m: Any, m1: Any = None) -> Parameter:
 
 
 def quarter_period(m1_hi: np.ndarray, m1_lo: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """K = π/(2 AGM(1, √m1)) in double-double; K = inf where m1 = 0."""
+    """K = π/(2 AGM(1, √m1)) in double-double; K = inf where m1 = 0.
+
+    A scalar parameter (the usual case: one motion, many times) is computed once per value.
+    """
+    if np.ndim(m1_hi) == 0 and np.ndim(m1_lo) == 0:
+        K_hi, K_lo = _quarter_period_scalar(float(m1_hi), float(m1_lo))
+        return np.asarray(K_hi), np.asarray(K_lo)
+    return _quarter_period(m1_hi, m1_lo)
+
+
+@functools.lru_cache(maxsize=256)
+def _quarter_period_scalar(m1_hi: float, m1_lo: float) -> tuple[float, float]:
+    K_hi, K_lo = _quarter_period(np.asarray(m1_hi), np.asarray(m1_lo))
+    return float(K_hi), float(K_lo)
+
+
+def _quarter_period(m1_hi: np.ndarray, m1_lo: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     m1_hi = np.asarray(m1_hi, dtype=float)
     zero = m1_hi == 0.0
     safe_hi = np.where(zero, 1.0, m1_hi)

@@ -197,7 +197,11 @@ def elliptic_pi_incomplete(n: Any, phi: Any, m: Any, *, m1: Any = None) -> np.nd
     needs_complete = (j != 0) | (c < 0)
     complete = np.zeros_like(half)
     if np.any(needs_complete):
-        complete = complete_pi(n_arr, p)
+        if n_arr.size > 1 and np.size(p.m) == 1 and np.all(n_arr == n_arr.flat[0]):
+            # one (n, m) for every point (the usual case): one complete integral, broadcast
+            complete = np.broadcast_to(complete_pi(n_arr.flat[0:1], p), half.shape)
+        else:
+            complete = complete_pi(n_arr, p)
     return as_output(assemble(j, s, c, half, complete))
 
 

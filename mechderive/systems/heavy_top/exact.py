@@ -102,10 +102,16 @@ def _angle_functions():
             for name, which in (("phi", "precession_fractions"), ("psi", "spin_fractions"))}
 
 
+#: Up to this many nutation periods the advance per period in double precision is exact enough
+#: (j·Δ errs by j·ulp(Δ) ≲ 1e-13 rad); beyond, its 40-digit value is used.
+_FEW_PERIODS = 64
+
+
 @dataclass(frozen=True)
 class _Angle:
     """The closed form of one precession-type angle: start, linear part, Π terms, advance per period."""
 
+    name: str
     start: float
     c0_over_kappa: float
     terms: tuple[tuple[float, float, float], ...]  # (c_i/κ, n_i, Π(n_i; am v0 | m))
@@ -168,9 +174,13 @@ class _Pass:
             value = value + c * (self.pi(n) - pi0)
         if spec.per_period is None:
             return value
+        per = spec.per_period
+        if j.size and np.max(np.abs(j)) > _FEW_PERIODS:
+            # Far out, j·Δ needs Δ beyond double precision: the 40-digit value, computed once.
+            per = sol._per_period_precise[spec.name]
         if reduced:
-            return value + _mod_two_pi(spec.per_period, j)
-        return value + j * (spec.per_period.hi + spec.per_period.lo)
+            return value + _mod_two_pi(per, j)
+        return value + j * (per.hi + per.lo)
 
     def rate(self, spec: _Angle) -> np.ndarray:
         sol = self.sol
@@ -230,6 +240,12 @@ class HeavyTopSolution:
     def _angles(self) -> dict[str, _Angle]:
         with mpmath.workdps(_DPS):
             return _angle_setup(self)
+
+    @functools.cached_property
+    def _per_period_precise(self) -> dict[str, _DD]:
+        """The advance of φ and ψ per nutation period at 40 digits (for evaluation far out)."""
+        with mpmath.workdps(_DPS):
+            return _precise_advance(self)
 
     # --- the phase ----------------------------------------------------------------------------
 
@@ -401,7 +417,44 @@ def exact_heavy_top(parameters: Mapping[str, float], initial: Mapping[str, float
         return _setup(params, init)
 
 
-def _real_roots(coeffs: list) -> list:
+def _real_roots(coeffs: list, known: mpmath.mpf | None = None) -> list:
+    """The three real roots of the cubic f(u) (coefficients of u³, u², u, 1), sorted, at 40 digits.
+
+    With a known root (a top started at a turning point, θ̇ = 0) the cubic is deflated and the
+    quadratic solved in closed form; otherwise double-precision roots are polished by Newton's
+    method at 40 digits, falling back to mpmath's polyroots when two roots nearly coincide
+    (where Newton's convergence is slow).
+    """
+    c3, c2, c1, c0 = coeffs
+    if known is not None:
+        # f(u) = (u - u0)(c3 u² + b2 u + b1): synthetic division
+        b2 = c2 + c3 * known
+        b1 = c1 + b2 * known
+        disc = b2 * b2 - 4 * c3 * b1
+        if disc < 0 and disc > -mpmath.mpf(10) ** (-_DPS + 5) * (b2 * b2 + abs(4 * c3 * b1)):
+            disc = mpmath.mpf(0)  # a double root, up to the 40-digit rounding
+        if disc >= 0:
+            sq = mpmath.sqrt(disc)
+            q = -(b2 + (sq if b2 >= 0 else -sq)) / 2  # no cancellation (Numerical Recipes 5.6)
+            others = [q / c3, b1 / q] if q != 0 else [mpmath.mpf(0), mpmath.mpf(0)]
+            return sorted([known, *others])
+    import numpy as np
+
+    approx = np.roots([float(c) for c in coeffs])
+    if np.all(np.abs(approx.imag) <= 1e-9 * (1 + np.abs(approx))):
+        approx = np.sort(approx.real)
+        if np.min(np.diff(approx)) > 1e-5 * (1 + np.max(np.abs(approx))):
+            roots = []
+            for r in approx:
+                x = mpmath.mpf(float(r))
+                for _ in range(8):
+                    fx = ((c3 * x + c2) * x + c1) * x + c0
+                    step = fx / ((3 * c3 * x + 2 * c2) * x + c1)
+                    x -= step
+                    if abs(step) <= mpmath.mpf(10) ** (-_DPS + 2) * (1 + abs(x)):
+                        break
+                roots.append(x)
+            return sorted(roots)
     roots = mpmath.polyroots(coeffs, maxsteps=200, extraprec=4 * _DPS)
     tiny = mpmath.mpf(10) ** (-_DPS // 2)
     real = sorted(mpmath.re(r) for r in roots if abs(mpmath.im(r)) <= tiny * (1 + abs(r)))
@@ -423,7 +476,7 @@ def _setup(params: dict, init: dict) -> HeavyTopSolution:
         + P[2] * P[3] * P[4] * u0
     common = dict(parameters=dict(params), initial=dict(init), energy=float(energy), p_phi=float(I1 * b),
                   p_psi=float(I1 * a))
-    u_1, u_2, u_3 = _real_roots(f["f"](a, b, alpha, beta))
+    u_1, u_2, u_3 = _real_roots(f["f"](a, b, alpha, beta), known=u0 if S[1] == 0 else None)
     # u0 lies in [u1, u2] up to the roots' own accuracy (40 digits); snap it in.
     u_2, u_1 = max(u_2, u0), min(u_1, u0)
     amp = u_2 - u_1
@@ -458,32 +511,53 @@ def _setup(params: dict, init: dict) -> HeavyTopSolution:
 
 
 def _angle_setup(sol: HeavyTopSolution) -> dict[str, _Angle]:
-    """Constants of φ(t) and ψ(t) at 40 digits, for the first request of either."""
+    """Constants of φ(t) and ψ(t), for the first request of either.
+
+    The partial-fraction coefficients come from 40-digit arithmetic; Π(n; am v0 | m) and the
+    complete Π(n | m) in the advance per period are double precision (see :data:`_FEW_PERIODS`).
+    """
+    from ...special.integrals import elliptic_pi, elliptic_pi_incomplete
+
     if sol.kind == "steady":
-        return {k: _Angle(sol.initial[k], 0.0, (), None, sol.initial[k + "_dot"]) for k in ("phi", "psi")}
+        return {k: _Angle(k, sol.initial[k], 0.0, (), None, sol.initial[k + "_dot"]) for k in ("phi", "psi")}
     v = sol._mp
     f = _angle_functions()
     frac_args = (v["I1"], v["I3"], v["a"], v["b"], *v["roots"])
-    kappa, m, A0, K = v["kappa"], v["m"], v["A0"], v["K"]
-    from ...special.integrals import elliptic_pi_incomplete
-
-    complete: dict = {}  # φ and ψ share their characteristics n±: one complete Π each
+    kappa, A0 = v["kappa"], v["A0"]
+    K = float(v["K"])
     out = {}
     for name in ("phi", "psi"):
         flat = f[name](*frac_args)
         c0 = flat[0]
-        terms, per = [], (c0 / kappa) * 2 * K if sol._period is not None else None
+        terms, per = [], float(c0 / kappa) * 2 * K if sol._period is not None else None
         for c, n in zip(flat[1::2], flat[2::2]):
             if abs(c) <= v["scale"] * (abs(v["a"]) + abs(v["b"]) + 1):
                 continue  # e.g. b = a when the apex passes through the pole: the n₊ term is absent
-            # Π(n; am v0) is an O(1) offset: double precision is enough.  The advance per period
-            # multiplies j up to ~1e15, so the complete Π is taken at 40 digits.
             pi0 = float(elliptic_pi_incomplete(float(n), float(A0), sol.m, m1=sol.m1))
             terms.append((float(c / kappa), float(n), pi0))
             if per is not None:
-                if n not in complete:
-                    complete[n] = mpmath.ellippi(n, m)
-                per += (c / kappa) * 2 * complete[n]
-        out[name] = _Angle(float(sol.initial[name]), float(c0 / kappa), tuple(terms),
-                           None if per is None else _DD.of(per), 0.0)
+                per += float(c / kappa) * 2 * float(elliptic_pi(float(n), sol.m, m1=sol.m1))
+        out[name] = _Angle(name, float(sol.initial[name]), float(c0 / kappa), tuple(terms),
+                           None if per is None else _DD(per, 0.0), 0.0)
+    return out
+
+
+def _precise_advance(sol: HeavyTopSolution) -> dict[str, _DD]:
+    """Δφ and Δψ per nutation period at 40 digits: (c0/κ)·2K + Σ (c_i/κ)·2Π(n_i | m)."""
+    v = sol._mp
+    f = _angle_functions()
+    frac_args = (v["I1"], v["I3"], v["a"], v["b"], *v["roots"])
+    kappa, m, K = v["kappa"], v["m"], v["K"]
+    complete: dict = {}  # φ and ψ share their characteristics n±
+    out = {}
+    for name in ("phi", "psi"):
+        flat = f[name](*frac_args)
+        per = (flat[0] / kappa) * 2 * K
+        for c, n in zip(flat[1::2], flat[2::2]):
+            if abs(c) <= v["scale"] * (abs(v["a"]) + abs(v["b"]) + 1):
+                continue
+            if n not in complete:
+                complete[n] = mpmath.ellippi(n, m)
+            per += (c / kappa) * 2 * complete[n]
+        out[name] = _DD.of(per)
     return out
