@@ -21,7 +21,25 @@ from typing import Any, Callable, Sequence, TypeVar
 
 from . import compile as _compile
 
-__all__ = ["SymbolicModel", "derived"]
+__all__ = ["SymbolicModel", "derived", "derivation_log", "derivation_seconds"]
+
+#: ("Model.quantity", seconds) for every derivation in this process, in completion order.
+_DERIVATION_LOG: list[tuple[str, float]] = []
+_DEPTH = [0]  # nesting of derivations in progress
+_TOP_LEVEL_SECONDS = [0.0]  # wall time spent in outermost derivations (no double counting)
+
+
+def derivation_seconds() -> float:
+    """Total wall time spent deriving in this process (nested derivations counted once)."""
+    return _TOP_LEVEL_SECONDS[0]
+
+
+def derivation_log() -> list[tuple[str, float]]:
+    """("Model.quantity", seconds) for every derivation performed in this process, in order.
+
+    Seconds are inclusive of the quantities a derivation needed first (each logged too).
+    """
+    return list(_DERIVATION_LOG)
 
 T = TypeVar("T")
 
@@ -47,10 +65,18 @@ class derived:  # noqa: N801 - used as a decorator, like functools.cached_proper
         cache = instance._derived_cache
         if self.name not in cache:
             start = time.perf_counter()
-            value = self.func(instance)
+            _DEPTH[0] += 1
+            try:
+                value = self.func(instance)
+            finally:
+                _DEPTH[0] -= 1
             cache[self.name] = value
+            elapsed = time.perf_counter() - start
+            if _DEPTH[0] == 0:
+                _TOP_LEVEL_SECONDS[0] += elapsed
             instance.derived.append(self.name)
-            instance.timings[self.name] = time.perf_counter() - start
+            instance.timings[self.name] = elapsed
+            _DERIVATION_LOG.append((f"{type(instance).__name__}.{self.name}", elapsed))
         return cache[self.name]
 
 

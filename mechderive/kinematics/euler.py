@@ -126,6 +126,19 @@ class KinematicsModel(SymbolicModel):
         return _simplify_matrix(R.T * R.diff(t))
 
     @derived
+    def state_euler_rates(self) -> sp.Matrix:
+        """(φ̇, θ̇, ψ̇) from the body ω = (omega1, omega2, omega3): (3.58) solved (singular at sin θ = 0)."""
+        names = ("phi_dot", "theta_dot", "psi_dot")
+        rates = [state_symbol(n) for n in names]
+        w = [state_symbol(f"omega{a}") for a in (1, 2, 3)]
+        sol = sp.solve([self.state_angular_velocity_body[a] - w[a] for a in range(3)], rates, dict=True)
+        if len(sol) != 1:
+            from ..errors import DerivationError
+
+            raise DerivationError(f"expected (3.58) to determine the Euler rates uniquely, got {sol}")
+        return sp.Matrix([simplify_trig(sol[0][r]) for r in rates])
+
+    @derived
     def state_rotation(self) -> sp.Matrix:
         """R(φ, θ, ψ) in the plain symbols ``phi, theta, psi``."""
         return to_state_symbols(self.rotation)

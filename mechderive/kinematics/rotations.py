@@ -18,7 +18,8 @@ from ..core.codecache import cached_lambdify, shape_of
 from ..core.compile import wrap_vectorised
 from ..core.validate import as_finite_array, check_rotation_matrix
 
-__all__ = ["rotation_matrix", "angular_velocity_body", "angular_velocity_space", "euler_angles_from_matrix"]
+__all__ = ["rotation_matrix", "angular_velocity_body", "angular_velocity_space", "euler_rates",
+           "euler_angles_from_matrix"]
 
 _RATES = ("phi", "theta", "psi", "phi_dot", "theta_dot", "psi_dot")
 
@@ -68,6 +69,20 @@ def angular_velocity_body(phi: Any, theta: Any, psi: Any, phi_dot: Any, theta_do
 def angular_velocity_space(phi: Any, theta: Any, psi: Any, phi_dot: Any, theta_dot: Any, psi_dot: Any) -> np.ndarray:
     """Space components (ω̃1, ω̃2, ω̃3) = Rᵀ ω of the angular velocity, vectorised; shape (..., 3)."""
     return _rates("state_angular_velocity_space", (phi, theta, psi, phi_dot, theta_dot, psi_dot))
+
+
+def euler_rates(theta: Any, psi: Any, omega1: Any, omega2: Any, omega3: Any) -> np.ndarray:
+    """(φ̇, θ̇, ψ̇) from the body angular velocity, (3.58) solved; shape (..., 3).
+
+    Singular where sin θ = 0 (only φ̇ + ψ̇ is defined there): the result is then inf or NaN,
+    which callers must treat as "not defined", not as a value.
+    """
+    names = ("theta", "psi", "omega1", "omega2", "omega3")
+    vals = [as_finite_array(v, n) for v, n in zip((theta, psi, omega1, omega2, omega3), names)]
+    f = _function("state_euler_rates", names)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        out = f(*vals)
+    return np.asarray(out).reshape(np.broadcast_shapes(*(v.shape for v in vals)) + (3,))
 
 
 def euler_angles_from_matrix(R: Any) -> np.ndarray:

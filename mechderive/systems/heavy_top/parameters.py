@@ -95,3 +95,9 @@ def check_initial(initial: Mapping[str, Any]) -> dict[str, Any]:
     return {k: (float(a) if a.ndim == 0 else a) for k, a in v.items()}
 
 
+
+
+#: Aliases used by the scene schema.
+PARAMETER_NAMES = PARAM_KEYS
+INITIAL_NAMES = INITIAL_KEYS
+check_parameters = check_params
