@@ -196,7 +196,7 @@ class _Pass:
 
 #: The quantities :meth:`HeavyTopSolution.evaluate` knows (each an array over t; R is (..., 3, 3),
 #: apex and omega (..., 3)).
-QUANTITIES = ("u", "theta", "theta_dot", "phi", "psi", "phi_wrapped", "psi_wrapped", "phi_dot", "psi_dot",
+QUANTITIES = ("u", "u_dot", "theta", "theta_dot", "phi", "psi", "phi_wrapped", "psi_wrapped", "phi_dot", "psi_dot",
               "R", "apex", "omega")
 
 
@@ -226,6 +226,7 @@ class HeavyTopSolution:
     energy: float
     p_phi: float
     p_psi: float
+    f_coefficients: tuple[float, float, float, float]  # of u³, u², u, 1 in f(u) (3.73)
     _kappa: _DD
     _v0: _DD
     _period: _DD | None  # 2K in v
@@ -298,6 +299,11 @@ class HeavyTopSolution:
             if steady:
                 return np.full(t.shape, np.cos(self._theta_const))
             return self._u1 + self._amp * ps.jacobi()[0] ** 2
+        if q == "u_dot":
+            if steady:
+                return np.zeros(t.shape)
+            sn, cn, dn = ps.jacobi()
+            return 2 * (self._kappa.hi + self._kappa.lo) * self._amp * sn * cn * dn
         if q == "theta":
             if steady:
                 return np.full(t.shape, self._theta_const)
@@ -474,9 +480,10 @@ def _setup(params: dict, init: dict) -> HeavyTopSolution:
     u0 = mpmath.cos(th0)
     energy = (I1 * (S[1] ** 2 + S[2] ** 2 * mpmath.sin(th0) ** 2) + I3 * (S[3] + S[2] * u0) ** 2) / 2 \
         + P[2] * P[3] * P[4] * u0
+    coeffs = f["f"](a, b, alpha, beta)
     common = dict(parameters=dict(params), initial=dict(init), energy=float(energy), p_phi=float(I1 * b),
-                  p_psi=float(I1 * a))
-    u_1, u_2, u_3 = _real_roots(f["f"](a, b, alpha, beta), known=u0 if S[1] == 0 else None)
+                  p_psi=float(I1 * a), f_coefficients=tuple(float(c) for c in coeffs))
+    u_1, u_2, u_3 = _real_roots(coeffs, known=u0 if S[1] == 0 else None)
     # u0 lies in [u1, u2] up to the roots' own accuracy (40 digits); snap it in.
     u_2, u_1 = max(u_2, u0), min(u_1, u0)
     amp = u_2 - u_1
