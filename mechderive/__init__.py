@@ -44,6 +44,11 @@ _PUBLIC = {
     "principal_axis_stability": "mechderive.systems.free_top.stability",
     "linearised_eigenvalues": "mechderive.systems.free_top.stability",
     "instability_growth_rate": "mechderive.systems.free_top.stability",
+    "exact_heavy_top": "mechderive.systems.heavy_top.exact",
+    "integrate_heavy_top": "mechderive.systems.heavy_top.integrate",
+    "falling_cat": "mechderive.systems.deformable.cat",
+    "DeformableBody": "mechderive.systems.deformable",
+    "net_rotation": "mechderive.systems.deformable",
     "run_claims": "mechderive.catalog.registry",
 }
 
