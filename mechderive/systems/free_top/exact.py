@@ -48,30 +48,17 @@ from typing import Any
 import mpmath
 import numpy as np
 
+from ...core.codecache import cached_lambdify
+from ...core.phase import DD, mod_two_pi, reduce_phase
 from ...core.validate import as_finite_array, check_rotation_matrix
 from ...errors import DerivationError, InvalidInputError
-from ...core.codecache import cached_lambdify
+from ...inertia.validate import check_principal_moments
 from ...kinematics.rotations import euler_angles_from_matrix, rotation_matrix
 from ...kinematics.so3 import expm_so3
-from ...special._doubledouble import PI_HI, PI_LO, dd_add, dd_mul, two_prod, two_sum
-from ...inertia.validate import check_principal_moments
 
 __all__ = ["FreeTopSolution", "exact_free_top"]
 
 _DPS = 40  # digits for the one-off constants: 1 - m keeps >= 25 digits down to 1 - m ~ 1e-15
-
-
-@dataclass(frozen=True)
-class _DD:
-    """A double-double constant hi + lo."""
-
-    hi: float
-    lo: float
-
-    @classmethod
-    def of(cls, x: mpmath.mpf) -> "_DD":
-        hi = float(x)
-        return cls(hi, float(x - mpmath.mpf(hi)))
 
 
 _CONSTANT_NAMES = ("P2", "S2", "lambda2", "Q2", "m", "m1")
@@ -134,8 +121,8 @@ class _Orientation:
     c2_over_lam: float
     n: float
     pi_u0: float
-    dphi: _DD | None  # precession per period (None on the separatrix)
-    rate_inf: _DD | None  # separatrix: the asymptotic precession rate c1 + c2/(1 - n)
+    dphi: DD | None  # precession per period (None on the separatrix)
+    rate_inf: DD | None  # separatrix: the asymptotic precession rate c1 + c2/(1 - n)
     arctan_u0: float  # separatrix: arctan(√(-n) tanh u0)
 
 
@@ -169,18 +156,6 @@ def _l_frame(L_space: np.ndarray) -> np.ndarray:
     return S
 
 
-def _mod_two_pi(rate: "_DD | float", x: np.ndarray) -> np.ndarray:
-    """(rate·x) modulo 2π, formed in double-double so that large x loses nothing beyond x's own rounding."""
-    hi_r, lo_r = (rate.hi, rate.lo) if isinstance(rate, _DD) else (float(rate), 0.0)
-    ph, pl = two_prod(hi_r, x)
-    pl = pl + lo_r * x
-    k = np.round(ph / (2 * PI_HI))
-    kh, kl = two_prod(k, 2 * PI_HI)
-    kl = kl + k * 2 * PI_LO
-    rh, rl = dd_add(ph, pl, -kh, -kl)
-    return rh + rl
-
-
 @dataclass(frozen=True)
 class FreeTopSolution:
     """The exact motion of one free rigid body; call its methods with arrays of times (s).
@@ -203,9 +178,9 @@ class FreeTopSolution:
     polhode_period: float
     _perm: np.ndarray
     _amp: tuple[float, float, float]
-    _lam: _DD
-    _u0: _DD
-    _period: _DD | None  # 4K in u
+    _lam: DD
+    _u0: DD
+    _period: DD | None  # 4K in u
     _I_rel: tuple[float, float, float]
     _mp: dict = field(default_factory=dict, repr=False)  # 40-digit setup values for the lazy orientation
 
@@ -228,26 +203,8 @@ class FreeTopSolution:
     # --- the phase ---------------------------------------------------------------------------
 
     def _phase(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(j, r): u(t) = λt + u0 = j·4K + r with integer j and r in [0, 4K), in double-double."""
-        hi, lo = two_prod(self._lam.hi, t)
-        lo = lo + self._lam.lo * t
-        hi, lo = dd_add(hi, lo, self._u0.hi, self._u0.lo)
-        if self._period is None:
-            return np.zeros_like(t), hi + lo
-        j = np.floor(hi / self._period.hi)
-        # r = u - j·4K in double-double; j is exact (|j| < 2**53)
-        ph, pl = two_prod(j, self._period.hi)
-        pl = pl + j * self._period.lo
-        rh, rl = dd_add(hi, lo, -ph, -pl)
-        r = rh + rl
-        # floor on the rounded hi part can be off by one at a period boundary: fix it
-        low = r < 0
-        r = np.where(low, r + self._period.hi, r)
-        j = np.where(low, j - 1, j)
-        high = r >= self._period.hi
-        r = np.where(high, r - self._period.hi, r)
-        j = np.where(high, j + 1, j)
-        return j, r
+        """(j, r): u(t) = λt + u0 = j·4K + r with integer j and r in [0, 4K) (see :mod:`mechderive.core.phase`)."""
+        return reduce_phase(self._lam, self._u0, self._period, t)
 
     def _elliptic(self, t: np.ndarray):
         from ...special.jacobi import jacobi_am, jacobi_sn_cn_dn
@@ -303,12 +260,12 @@ class FreeTopSolution:
             # double-double, so nothing cancels however long the run (Π itself grows like u).
             k = np.sqrt(-o.n)
             bounded = o.c2_over_lam * k / (1 - o.n) * (np.arctan(k * np.tanh(r)) - o.arctan_u0)
-            return o.phi0 + _mod_two_pi(o.rate_inf, t) + bounded, theta, psi_red
+            return o.phi0 + mod_two_pi(o.rate_inf, t) + bounded, theta, psi_red
         pi_r = np.asarray(elliptic_pi_incomplete(o.n, A, self.m, m1=self.m1))
         phi_red = o.phi0 + o.c1_over_lam * (r - self._u0.hi - self._u0.lo) + o.c2_over_lam * (pi_r - o.pi_u0)
         if continuous:
             return phi_red + j * (o.dphi.hi + o.dphi.lo), theta, psi_red - s * 2 * np.pi * j
-        return phi_red + _mod_two_pi(o.dphi, j), theta, psi_red
+        return phi_red + mod_two_pi(o.dphi, j), theta, psi_red
 
     def euler_angles(self, t: Any) -> np.ndarray:
         """Euler angles (φ, θ, ψ) of R(t), continuous in time; shape (..., 3).
@@ -337,7 +294,7 @@ class FreeTopSolution:
             wn = np.linalg.norm(w)
             if wn == 0:
                 return np.broadcast_to(self.R0, t.shape + (3, 3)).copy()
-            return expm_so3(_mod_two_pi(wn, t)[..., None] * (w / wn)) @ self.R0
+            return expm_so3(mod_two_pi(wn, t)[..., None] * (w / wn)) @ self.R0
         phi, theta, psi = self._angles(t, continuous=False)
         RL = rotation_matrix(phi, theta, psi)
         return self._perm.T @ RL @ self._S
@@ -426,7 +383,7 @@ def _setup(I: np.ndarray, w0: np.ndarray, R0: np.ndarray) -> FreeTopSolution:
 
     def steady() -> FreeTopSolution:
         return FreeTopSolution(kind="steady", m=0.0, m1=1.0, polhode_period=float("nan"), _perm=np.eye(3),
-                               _amp=(0.0, 0.0, 0.0), _lam=_DD(0.0, 0.0), _u0=_DD(0.0, 0.0), _period=None,
+                               _amp=(0.0, 0.0, 0.0), _lam=DD(0.0, 0.0), _u0=DD(0.0, 0.0), _period=None,
                                _I_rel=(1.0, 1.0, 1.0), **common)
 
     if L2 == 0 or I[lo_ax] == I[hi_ax]:
@@ -469,10 +426,10 @@ def _setup(I: np.ndarray, w0: np.ndarray, R0: np.ndarray) -> FreeTopSolution:
         period, T = None, float("inf")
     else:
         K = mpmath.ellipk(m)
-        period, T = _DD.of(4 * K), float(4 * K / lam)
+        period, T = DD.of(4 * K), float(4 * K / lam)
     return FreeTopSolution(
         kind="separatrix" if separatrix else "elliptic", m=float(m), m1=float(m1), polhode_period=T,
-        _perm=perm, _amp=(float(P), float(Q), float(S)), _lam=_DD.of(lam), _u0=_DD.of(u0), _period=period,
+        _perm=perm, _amp=(float(P), float(Q), float(S)), _lam=DD.of(lam), _u0=DD.of(u0), _period=period,
         _I_rel=(float(Ix), float(Iy), float(Iz)),
         _mp=dict(args=args, m=m, lam=lam, u0=u0, A0=A0), **common)
 
@@ -490,11 +447,11 @@ def _orientation_setup(sol: FreeTopSolution) -> _Orientation:
     dphi = rate_inf = None
     arctan_u0 = 0.0
     if sol._period is None:
-        rate_inf = _DD.of(c1 + c2 / (1 - n))
+        rate_inf = DD.of(c1 + c2 / (1 - n))
         arctan_u0 = float(mpmath.atan(mpmath.sqrt(-n) * mpmath.tanh(u0)))
     else:
         K = mpmath.ellipk(m)
-        dphi = _DD.of(c1 * 4 * K / lam + c2 / lam * 4 * mpmath.ellippi(n, m))
+        dphi = DD.of(c1 * 4 * K / lam + c2 / lam * 4 * mpmath.ellippi(n, m))
     # The L frame and φ'0: L in space components is R0ᵀ L_body.
     L_body = np.array(sol.moments) * np.array(sol.omega0)
     S_frame = _l_frame(sol.R0.T @ L_body)

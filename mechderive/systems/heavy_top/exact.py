@@ -46,8 +46,7 @@ from ...core.validate import as_finite_array
 from ...errors import DerivationError, InvalidInputError
 from ...core.codecache import cached_lambdify
 from ...kinematics.rotations import angular_velocity_body, rotation_matrix
-from ...special._doubledouble import dd_add, two_prod
-from ..free_top.exact import _DD, _mod_two_pi
+from ...core.phase import DD, mod_two_pi, reduce_phase
 from .parameters import check_initial, check_params
 
 __all__ = ["HeavyTopSolution", "exact_heavy_top"]
@@ -115,7 +114,7 @@ class _Angle:
     start: float
     c0_over_kappa: float
     terms: tuple[tuple[float, float, float], ...]  # (c_i/κ, n_i, Π(n_i; am v0 | m))
-    per_period: _DD | None
+    per_period: DD | None
     rate: float  # for steady motion: the constant rate
 
 
@@ -167,7 +166,7 @@ class _Pass:
     def angle(self, spec: _Angle, *, reduced: bool) -> np.ndarray:
         sol, t = self.sol, self.t
         if sol.kind == "steady":
-            return spec.start + (_mod_two_pi(spec.rate, t) if reduced else spec.rate * t)
+            return spec.start + (mod_two_pi(spec.rate, t) if reduced else spec.rate * t)
         j, r = self.phase()
         value = spec.start + spec.c0_over_kappa * (r - sol._v0.hi - sol._v0.lo)
         for c, n, pi0 in spec.terms:
@@ -179,7 +178,7 @@ class _Pass:
             # Far out, j·Δ needs Δ beyond double precision: the 40-digit value, computed once.
             per = sol._per_period_precise[spec.name]
         if reduced:
-            return value + _mod_two_pi(per, j)
+            return value + mod_two_pi(per, j)
         return value + j * (per.hi + per.lo)
 
     def rate(self, spec: _Angle) -> np.ndarray:
@@ -227,9 +226,9 @@ class HeavyTopSolution:
     p_phi: float
     p_psi: float
     f_coefficients: tuple[float, float, float, float]  # of u³, u², u, 1 in f(u) (3.73)
-    _kappa: _DD
-    _v0: _DD
-    _period: _DD | None  # 2K in v
+    _kappa: DD
+    _v0: DD
+    _period: DD | None  # 2K in v
     _u1: float
     _amp: float  # u2 - u1
     _one_minus_u2: float
@@ -243,7 +242,7 @@ class HeavyTopSolution:
             return _angle_setup(self)
 
     @functools.cached_property
-    def _per_period_precise(self) -> dict[str, _DD]:
+    def _per_period_precise(self) -> dict[str, DD]:
         """The advance of φ and ψ per nutation period at 40 digits (for evaluation far out)."""
         with mpmath.workdps(_DPS):
             return _precise_advance(self)
@@ -251,22 +250,8 @@ class HeavyTopSolution:
     # --- the phase ----------------------------------------------------------------------------
 
     def _phase(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(j, r): v(t) = κt + v0 = j·2K + r with integer j and r in [0, 2K), in double-double."""
-        hi, lo = two_prod(self._kappa.hi, t)
-        lo = lo + self._kappa.lo * t
-        hi, lo = dd_add(hi, lo, self._v0.hi, self._v0.lo)
-        if self._period is None:
-            return np.zeros_like(t), hi + lo
-        j = np.floor(hi / self._period.hi)
-        ph, pl = two_prod(j, self._period.hi)
-        pl = pl + j * self._period.lo
-        rh, rl = dd_add(hi, lo, -ph, -pl)
-        r = rh + rl
-        low = r < 0
-        r, j = np.where(low, r + self._period.hi, r), np.where(low, j - 1, j)
-        high = r >= self._period.hi
-        r, j = np.where(high, r - self._period.hi, r), np.where(high, j + 1, j)
-        return j, r
+        """(j, r): v(t) = κt + v0 = j·2K + r with integer j and r in [0, 2K) (see :mod:`mechderive.core.phase`)."""
+        return reduce_phase(self._kappa, self._v0, self._period, t)
 
     # --- one pass over many quantities ---------------------------------------------------------
 
@@ -492,7 +477,7 @@ def _setup(params: dict, init: dict) -> HeavyTopSolution:
     if amp <= scale or (mpmath.sin(th0) == 0 and S[1] == 0):
         return HeavyTopSolution(
             kind="steady", roots=roots_f, m=0.0, m1=1.0, nutation_period=float("nan"), conditioning=1.0,
-            motion_class="uniform precession", _kappa=_DD(0.0, 0.0), _v0=_DD(0.0, 0.0), _period=None,
+            motion_class="uniform precession", _kappa=DD(0.0, 0.0), _v0=DD(0.0, 0.0), _period=None,
             _u1=float(u0), _amp=0.0, _one_minus_u2=float(1 - u0), _one_plus_u1=float(1 + u0),
             _theta_const=float(th0), _mp=dict(steady=True), **common)
     roots = (u_1, u_2, u_3)
@@ -504,14 +489,14 @@ def _setup(params: dict, init: dict) -> HeavyTopSolution:
         (mpmath.pi / 2 if s0 > mp(1) / 2 else mp(0))
     v0 = mpmath.ellipf(A0, m)
     K = mpmath.ellipk(m) if m1 != 0 else mpmath.inf
-    period = None if m1 == 0 else _DD.of(2 * K)
+    period = None if m1 == 0 else DD.of(2 * K)
     n_plus = (u_2 - u_1) / (1 - u_1)
     return HeavyTopSolution(
         kind="nutating", roots=roots_f, m=float(m), m1=float(m1),
         nutation_period=float(2 * K / kappa) if period is not None else float("inf"),
         conditioning=float(1 / (1 - n_plus)) if n_plus < 1 else float("inf"),
         motion_class=classify(float(u_1), float(u_2), float(a), float(b)),
-        _kappa=_DD.of(kappa), _v0=_DD.of(v0), _period=period, _u1=float(u_1), _amp=float(amp),
+        _kappa=DD.of(kappa), _v0=DD.of(v0), _period=period, _u1=float(u_1), _amp=float(amp),
         _one_minus_u2=float(1 - u_2), _one_plus_u1=float(1 + u_1), _theta_const=float(th0),
         _mp=dict(steady=False, I1=I1, I3=I3, a=a, b=b, roots=roots, kappa=kappa, m=m, A0=A0, K=K,
                  scale=scale), **common)
@@ -545,11 +530,11 @@ def _angle_setup(sol: HeavyTopSolution) -> dict[str, _Angle]:
             if per is not None:
                 per += float(c / kappa) * 2 * float(elliptic_pi(float(n), sol.m, m1=sol.m1))
         out[name] = _Angle(name, float(sol.initial[name]), float(c0 / kappa), tuple(terms),
-                           None if per is None else _DD(per, 0.0), 0.0)
+                           None if per is None else DD(per, 0.0), 0.0)
     return out
 
 
-def _precise_advance(sol: HeavyTopSolution) -> dict[str, _DD]:
+def _precise_advance(sol: HeavyTopSolution) -> dict[str, DD]:
     """Δφ and Δψ per nutation period at 40 digits: (c0/κ)·2K + Σ (c_i/κ)·2Π(n_i | m)."""
     v = sol._mp
     f = _angle_functions()
@@ -566,5 +551,5 @@ def _precise_advance(sol: HeavyTopSolution) -> dict[str, _DD]:
             if n not in complete:
                 complete[n] = mpmath.ellippi(n, m)
             per += (c / kappa) * 2 * complete[n]
-        out[name] = _DD.of(per)
+        out[name] = DD.of(per)
     return out
