@@ -1,0 +1,101 @@
+"""``mechderive derive``: print the toolkit's derived equations as text, LaTeX, SymPy, Python, C or JSON.
+
+Examples::
+
+    mechderive derive heavy_top                          # L (3.62), (φ̈, θ̈, ψ̈), p_ψ, p_φ, E
+    mechderive derive heavy_top f_u p_phi --format latex
+    mechderive derive heavy_top --shape solid_cone       # a uniform cone about its apex
+    mechderive derive free_top stability_A
+    mechderive derive rotation --sequence XYZ --frame space --format python
+    mechderive derive angular_velocity --sequence zyx    # lower case: space-fixed, as in SciPy
+    mechderive derive inertia solid_cone --pivot 0
+    mechderive derive heavy_top --list
+
+Nothing is imported from SymPy until the command runs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+FORMATS = ("text", "latex", "sympy", "python", "c", "json")
+
+
+def add_parser(sub: "argparse._SubParsersAction") -> None:
+    p = sub.add_parser(
+        "derive",
+        help="print derived equations (text, LaTeX, SymPy, Python, C, JSON)",
+        description="Print a system's derived quantities: by default its Lagrangian, equations of motion and "
+                    "conserved quantities; or the QUANTITY names given (see --list).  Systems: free_top, "
+                    "heavy_top, falling_cat, rotation, angular_velocity, inertia SHAPE.",
+    )
+    p.add_argument("system", metavar="SYSTEM", help="free_top, heavy_top, falling_cat, rotation, angular_velocity "
+                                                    "or inertia (then SHAPE first)")
+    p.add_argument("quantities", metavar="QUANTITY", nargs="*", help="quantities to print (default: the main ones)")
+    p.add_argument("--format", default="text", metavar="FORMAT",
+                   help=f"one of {', '.join(FORMATS)} (default text)")
+    p.add_argument("--list", action="store_true", help="list the quantities with the chapter's equation numbers")
+    p.add_argument("--sequence", default="ZXZ", metavar="SEQ",
+                   help="Euler sequence, one of the 12 (ZXZ XYX YZY ZYZ XZX YXY XYZ YZX ZXY XZY ZYX YXZ); "
+                        "lower case means space-fixed as in SciPy (default ZXZ)")
+    p.add_argument("--frame", default=None, metavar="FRAME",
+                   help="body (intrinsic, default) or space (extrinsic) axes for the sequence")
+    form = p.add_mutually_exclusive_group()
+    form.add_argument("--simplify", action="store_true", help="apply sympy.simplify to every result (slow)")
+    form.add_argument("--cse", action="store_true", help="print text/LaTeX with common subexpressions pulled out")
+    p.add_argument("--shape", default=None, metavar="SHAPE",
+                   help="a standard body (solid_cone, disc, ...) whose derived inertia replaces I1, I2, I3 (and l)")
+    p.add_argument("--pivot", default=None, metavar="Z",
+                   help="pivot (0, 0, Z) on axis 3 in the shape's coordinates, e.g. -h/2 (with --shape)")
+    p.add_argument("--moments", nargs=3, default=None, metavar=("I1", "I2", "I3"), help="numeric principal moments")
+    p.add_argument("--set", action="append", default=[], metavar="NAME=NUMBER", dest="values",
+                   help="substitute a number for a symbol (repeatable), e.g. --set g=9.81")
+    p.set_defaults(run=run)
+
+
+def _shape_and_quantities(args: argparse.Namespace) -> tuple[str | None, list[str]]:
+    quantities = list(args.quantities)
+    shape = args.shape
+    if args.system == "inertia" and shape is None:
+        from ..errors import InvalidInputError
+        from ..inertia.bodies import BODIES
+
+        if not quantities or quantities[0] not in BODIES:
+            got = quantities[0] if quantities else "none"
+            raise InvalidInputError(f"expected a shape after inertia, one of {', '.join(BODIES)}, got {got!r}")
+        shape = quantities.pop(0)
+    return shape, quantities
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..derive.catalog import listing, system
+    from ..derive.formats import render
+    from ..derive.options import parse_assignment
+    from ..errors import InvalidInputError
+
+    spec = system(args.system)
+    if args.format not in FORMATS:
+        raise InvalidInputError(f"expected a format among {', '.join(FORMATS)}, got {args.format!r}")
+    if args.list:
+        width = max(len(q) for q in spec.quantities)
+        print(f"{spec.name}: {spec.summary}")
+        for name, description, equation in listing(args.system):
+            mark = "*" if name in spec.defaults else " "
+            eq = f"({equation})" if equation else ""
+            print(f" {mark} {name:<{width}}  {eq:<8}  {description}")
+        print("(* printed by default)")
+        return 0
+    from ..derive.api import derive_entries
+    from ..derive.options import Options
+
+    shape, quantities = _shape_and_quantities(args)
+    values = dict(parse_assignment(v) for v in args.values)
+    entries = derive_entries(args.system, quantities or None, sequence=args.sequence, frame=args.frame, shape=shape,
+                             pivot=args.pivot, moments=args.moments, values=values, simplify=args.simplify)
+    opts = Options(sequence=args.sequence, frame=args.frame)
+    shown = {"sequence": opts.sequence, "frame": opts.frame} if "sequence" in spec.takes else {}
+    shown.update({"shape": shape, "pivot": args.pivot, "moments": " ".join(args.moments) if args.moments else None})
+    shown.update(values)
+    sys.stdout.write(render(entries, args.format, system=args.system, summary=spec.summary, options=shown, cse=args.cse))
+    return 0

@@ -1,0 +1,147 @@
+"""``derive``: a system's quantities as SymPy objects, with a shape, numbers or another Euler sequence.
+
+>>> out = derive("heavy_top", ["p_psi"])
+>>> out["p_psi"]                                   # (3.63)
+I3*(phi_dot*cos(theta) + psi_dot)
+>>> derive("heavy_top", ["p_psi"], shape="solid_cone")["p_psi"]      # a uniform cone about its apex
+3*M*R**2*(phi_dot*cos(theta) + psi_dot)/10
+>>> derive("rotation", sequence="XYZ", frame="space")["R"][0, 2]
+-sin(theta)
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Any, Iterable, Mapping, Sequence
+
+import sympy as sp
+
+from ..errors import InvalidInputError
+from .catalog import ZERO, System, system
+from .options import Options
+
+__all__ = ["Derived", "derive", "derive_entries"]
+
+
+@dataclass(frozen=True)
+class Derived:
+    """One derived quantity: its name, description, equation number, left-hand side and value."""
+
+    name: str
+    description: str
+    equation: str
+    lhs: Any
+    value: Any
+
+    @property
+    def is_zero_form(self) -> bool:
+        """Whether it prints as "value = 0"."""
+        return self.lhs is ZERO
+
+
+def _check_takes(spec: System, options: Options, given: Mapping[str, Any]) -> None:
+    for option, value in given.items():
+        if value and option not in spec.takes:
+            raise InvalidInputError(f"expected no {option} for {spec.name} (it takes "
+                                    f"{', '.join(sorted(spec.takes))}), got {value!r}")
+    if "sequence" not in spec.takes and not options.is_default_sequence:
+        raise InvalidInputError(f"expected the chapter's ZXZ body-fixed angles for {spec.name} (its model is "
+                                f"derived in them), got {options.sequence} {options.frame}-fixed")
+    if spec.name == "inertia" and options.shape is None:
+        from ..inertia.bodies import BODIES
+
+        raise InvalidInputError(f"expected a shape for inertia, one of {', '.join(BODIES)}, got none")
+
+
+def _apply(value: Any, subs: dict) -> Any:
+    if not subs:
+        return value
+    if isinstance(value, sp.MatrixBase):
+        return value.applyfunc(lambda e: sp.sympify(e).subs(subs, simultaneous=True))
+    return sp.sympify(value).subs(subs, simultaneous=True)
+
+
+def _simplified(value: Any) -> Any:
+    if isinstance(value, sp.MatrixBase):
+        return value.applyfunc(sp.simplify)
+    return sp.simplify(value)
+
+
+def _free_symbols(value: Any) -> set[sp.Symbol]:
+    return set(value.free_symbols if isinstance(value, sp.MatrixBase) else sp.sympify(value).free_symbols)
+
+
+def _free_names(value: Any) -> set[str]:
+    return {s.name for s in _free_symbols(value)}
+
+
+def derive_entries(system_name: str, quantities: Iterable[str] | None = None, *, sequence: str = "ZXZ",
+                   frame: str | None = None, shape: str | None = None, pivot: Any = None,
+                   moments: Sequence[Any] | None = None, values: Mapping[Any, Any] | None = None,
+                   simplify: bool = False) -> list[Derived]:
+    """The :class:`Derived` records of :func:`derive` (with description, equation number, left-hand side)."""
+    spec = system(system_name)
+    options = Options(sequence=sequence, frame=frame, shape=shape, pivot=pivot, moments=moments,
+                      values=dict(values or {}), simplify=simplify)
+    _check_takes(spec, options, {"shape": shape if system_name != "inertia" else None, "moments": moments,
+                                 "pivot": pivot if system_name not in ("inertia", "heavy_top", "free_top") else None})
+    names = list(spec.defaults) if quantities is None else list(quantities)
+    if isinstance(quantities, str):
+        names = [quantities]
+    if not names:
+        raise InvalidInputError(f"expected at least one quantity of {system_name}, got none")
+    unknown = [q for q in names if q not in spec.quantities]
+    if unknown:
+        raise InvalidInputError(f"expected quantities of {system_name} among {', '.join(spec.quantities)}, "
+                                f"got {unknown[0]!r}")
+    subs = {}
+    if spec.parameters is not None:
+        subs.update(spec.parameters(options))
+    out = []
+    for q in dict.fromkeys(names):
+        qs = spec.quantities[q]
+        value = _apply(qs.build(options), subs)
+        lhs = qs.lhs if qs.lhs is ZERO else qs.lhs()
+        out.append(Derived(q, qs.description, qs.equation, lhs, value))
+    if options.values:
+        present = set().union(*(_free_names(d.value) for d in out))
+        missing = sorted(set(options.values) - present)
+        if missing:
+            raise InvalidInputError(f"expected values for symbols among {', '.join(sorted(present)) or 'none'}, "
+                                    f"got {missing[0]!r}")
+        out = [replace(d, value=_apply(d.value, {s: options.values[s.name] for s in _free_symbols(d.value)
+                                                 if s.name in options.values}))
+               for d in out]
+    if simplify:
+        out = [replace(d, value=_simplified(d.value)) for d in out]
+    return out
+
+
+def derive(system: str, quantities: Iterable[str] | None = None, *, sequence: str = "ZXZ",
+           frame: str | None = None, shape: str | None = None, pivot: Any = None,
+           moments: Sequence[Any] | None = None, values: Mapping[Any, Any] | None = None,
+           simplify: bool = False) -> dict[str, Any]:
+    """{quantity: SymPy object} of ``system``, derived by the toolkit (never typed in).
+
+    Parameters
+    ----------
+    system
+        ``free_top``, ``heavy_top``, ``falling_cat``, ``rotation``, ``angular_velocity`` or ``inertia``
+        (see :mod:`.catalog`; :func:`~mechderive.derive.catalog.listing` says what each offers).
+    quantities
+        Names of quantities; by default the Lagrangian, equations of motion and conserved
+        quantities (or the system's main objects).
+    sequence, frame
+        The Euler sequence (one of the twelve; lower case = space-fixed, as in SciPy) and
+        ``"body"`` or ``"space"``-fixed axes, for ``rotation``, ``angular_velocity`` and the
+        free top's Lagrangian (:mod:`.sequences`).
+    shape, pivot, moments, values
+        A standard body's derived inertia, numeric moments (I1, I2, I3), or numbers for any
+        symbol (:mod:`.options`).
+    simplify
+        Apply :func:`sympy.simplify` to every value (slow for the falling cat).
+
+    Values are in the state symbols ``phi, theta, psi, phi_dot, …``.
+    """
+    return {d.name: d.value for d in derive_entries(system, quantities, sequence=sequence, frame=frame, shape=shape,
+                                                     pivot=pivot, moments=moments, values=values, simplify=simplify)}

@@ -1,0 +1,377 @@
+"""Printing derived quantities: text, LaTeX, SymPy source, Python (NumPy) source, C source, JSON.
+
+One function per format, each taking SymPy objects:
+
+- :func:`to_text` — unicode pretty-printing, ``phi_dot`` shown as φ̇;
+- :func:`to_latex` — LaTeX with the chapter's symbols (``\\dot{\\phi}``, ``I_{1}``), for amsmath;
+- :func:`to_sympy_source` — Python source that rebuilds the SymPy objects *exactly*: one
+  ``Symbol(name, assumptions)`` per symbol, then each object in SymPy's ``str`` form with exact
+  integers (``S(1)/2``).  Chosen over ``srepr`` (which :func:`to_json` carries) because it is
+  both readable and exact;
+- :func:`to_python_source` — a standalone NumPy function (common subexpressions eliminated by
+  :func:`sympy.cse`, printed by SymPy's ``NumPyPrinter``) whose docstring lists the argument
+  order and units; it broadcasts like :func:`mechderive.core.compile.compile_expressions`:
+  a result of shape S at arguments broadcasting to B has shape B + S;
+- :func:`to_c_source` — a C99 function (cse'd, printed by :func:`sympy.ccode`) writing the
+  row-major entries to ``double *out``, with a header comment listing the arguments and units;
+- :func:`to_json` — per quantity: description, equation, text, LaTeX, ``str`` and ``srepr``.
+
+:func:`render` puts a list of :class:`~mechderive.derive.api.Derived` together in one format.
+Arguments of generated code default to :func:`argument_order`: the parameters, then the state,
+then any other symbol by name (see :data:`mechderive.derive.catalog.ARGUMENTS`).
+
+>>> import sympy as sp
+>>> x = sp.Symbol("theta_dot")
+>>> to_latex(x**2 / 2, sp.Symbol("T"))
+'T = \\\\frac{\\\\dot{\\\\theta}^{2}}{2}'
+"""
+
+from __future__ import annotations
+
+import json
+import keyword
+from typing import Any, Mapping, Sequence
+
+import sympy as sp
+from sympy.core.function import AppliedUndef
+
+from ..core.display import display_symbols
+from ..errors import InvalidInputError
+
+__all__ = ["FORMATS", "argument_order", "to_text", "to_latex", "to_sympy_source", "to_python_source",
+           "to_c_source", "to_json", "render"]
+
+#: The output formats.
+FORMATS = ("text", "latex", "sympy", "python", "c", "json")
+
+
+def _flat(expr: Any) -> tuple[list[sp.Expr], tuple[int, ...]]:
+    if isinstance(expr, sp.MatrixBase):
+        return [sp.sympify(e) for e in expr], tuple(expr.shape)
+    return [sp.sympify(expr)], ()
+
+
+def _check_printable(flat: Sequence[sp.Expr]) -> None:
+    for e in flat:
+        bad = e.atoms(AppliedUndef, sp.Derivative)
+        if bad:
+            raise InvalidInputError(f"expected expressions in plain symbols for code, got {sorted(map(str, bad))[0]}")
+
+
+def argument_order(exprs: Any) -> list[sp.Symbol]:
+    """The free symbols of ``exprs`` in the order generated functions take them.
+
+    >>> import sympy as sp
+    >>> argument_order(sp.Symbol("theta") + sp.Symbol("I1") + sp.Symbol("zeta"))
+    [I1, theta, zeta]
+    """
+    from .catalog import ARGUMENTS
+
+    items = exprs.values() if isinstance(exprs, Mapping) else (exprs if isinstance(exprs, (list, tuple)) else [exprs])
+    free: set[sp.Symbol] = set()
+    for e in items:
+        free |= set(e.free_symbols if isinstance(e, sp.MatrixBase) else sp.sympify(e).free_symbols)
+    rank = {n: i for i, n in enumerate(ARGUMENTS)}
+    return sorted(free, key=lambda s: (rank.get(s.name, len(rank)), s.name))
+
+
+# ------------------------------------------------------------------------------ text and LaTeX
+def _equation(expr: Any, lhs: Any) -> Any:
+    if lhs is None:
+        return display_symbols(expr)
+    if isinstance(lhs, str):  # "= 0"
+        return sp.Eq(display_symbols(expr), sp.zeros(*expr.shape) if isinstance(expr, sp.MatrixBase) else 0,
+                     evaluate=False)
+    return sp.Eq(display_symbols(lhs), display_symbols(expr), evaluate=False)
+
+
+def _greek_subscripts(expr: Any) -> Any:
+    """Symbols ``p_psi`` renamed ``p_ψ``: unicode has no subscript ψ, and SymPy would print pₚₛᵢ."""
+    from sympy.printing.pretty.pretty_symbology import greek_unicode
+
+    subs = {}
+    for s in expr.free_symbols:
+        base, sep, sub = s.name.partition("_")
+        if sep and sub in greek_unicode and base:
+            subs[s] = sp.Symbol(f"{base}_{greek_unicode[sub]}", **s.assumptions0)
+    return expr.xreplace(subs) if subs else expr
+
+
+def to_text(expr: Any, lhs: Any = None) -> str:
+    """``lhs = expr`` (or ``expr``) pretty-printed in unicode, rates shown with dots.
+
+    >>> import sympy as sp
+    >>> print(to_text(sp.Symbol("phi_dot") * sp.cos(sp.Symbol("theta")), sp.Symbol("p_psi")))
+    p_ψ = φ̇⋅cos(θ)
+    """
+    return sp.pretty(_greek_subscripts(_equation(expr, lhs)), use_unicode=True, wrap_line=False)
+
+
+def to_latex(expr: Any, lhs: Any = None) -> str:
+    """``lhs = expr`` (or ``expr``) in LaTeX: ``\\dot{q}`` for q_dot, ``I_{1}`` for I1; matrices need amsmath."""
+    return sp.latex(_equation(expr, lhs))
+
+
+def _cse(exprs: list[sp.Expr]) -> tuple[list[tuple[sp.Symbol, sp.Expr]], list[sp.Expr]]:
+    return sp.cse(exprs, symbols=sp.numbered_symbols("x"), optimizations="basic")
+
+
+def _text_block(d: Any, cse: bool, latex: bool) -> str:
+    fmt = to_latex if latex else to_text
+    lhs = d.lhs
+    if not cse:
+        return fmt(d.value, lhs)
+    flat, shape = _flat(d.value)
+    repl, reduced = _cse(flat)
+    value = sp.Matrix(*shape, reduced) if shape else reduced[0]
+    lines = [fmt(e, s) for s, e in repl] + [fmt(value, lhs)]
+    if latex:
+        return "\\begin{aligned}\n" + " \\\\\n".join(l.replace(" = ", " &= ", 1) for l in lines) + "\n\\end{aligned}"
+    return "\n".join(lines)
+
+
+# ------------------------------------------------------------------------------ SymPy source
+def _identifiers(symbols: Sequence[sp.Symbol], reserved: set[str]) -> dict[sp.Symbol, str]:
+    out, used = {}, set()
+    for s in sorted(symbols, key=lambda s: s.name):
+        name = "".join(c if (c.isalnum() or c == "_") else "_" for c in s.name)
+        if not name or name[0].isdigit():
+            name = "_" + name
+        while keyword.iskeyword(name) or name in reserved or name in used:
+            name += "_"
+        out[s] = name
+        used.add(name)
+    return out
+
+
+def to_sympy_source(exprs: Mapping[str, Any], *, comments: Mapping[str, str] | None = None) -> str:
+    """Python source that rebuilds ``{name: SymPy object}`` exactly (symbols with their assumptions).
+
+    >>> import sympy as sp
+    >>> src = to_sympy_source({"T": sp.Symbol("I1", positive=True) * sp.Symbol("w")**2 / 2})
+    >>> print(src.splitlines()[-1])
+    T = I1*w**S(2)/S(2)
+    >>> ns = {}; exec(src, ns); ns["T"].free_symbols == {sp.Symbol("I1", positive=True), sp.Symbol("w")}
+    True
+    """
+    import sympy
+
+    from sympy.printing.str import StrPrinter
+
+    symbols = set()
+    for e in exprs.values():
+        symbols |= set(e.free_symbols)
+    reserved = set(getattr(sympy, "__all__", ())) | set(exprs)
+    ident = _identifiers(list(symbols), reserved)
+
+    class _Printer(StrPrinter):
+        def _print_Symbol(self, expr: sp.Symbol) -> str:
+            return ident.get(expr, expr.name)
+
+    printer = _Printer({"sympy_integers": True})
+    lines = ["from sympy import *", ""]
+    lines += [f"{ident[s]} = {sp.srepr(s)}" for s in sorted(symbols, key=lambda s: ident[s])]
+    lines.append("")
+    for name, e in exprs.items():
+        if comments and name in comments:
+            lines.append(f"# {comments[name]}")
+        lines.append(f"{name} = {printer.doprint(e)}")
+    return "\n".join(lines)
+
+
+# ------------------------------------------------------------------------------ code
+def _argument_lines(args: Sequence[sp.Symbol], names: Mapping[sp.Symbol, str], prefix: str) -> list[str]:
+    from .catalog import ARGUMENTS
+
+    width = max((len(names[a]) for a in args), default=0)
+    out = []
+    for a in args:
+        meaning, unit = ARGUMENTS.get(a.name, ("", ""))
+        text = f"{meaning} [{unit}]" if meaning else ""
+        alias = "" if names[a] == a.name else f" (symbol {a.name})"
+        out.append(f"{prefix}{names[a]:<{width}}  {text}{alias}".rstrip())
+    return out
+
+
+def _check_args(flat: Sequence[sp.Expr], args: Sequence[Any]) -> list[sp.Symbol]:
+    args = list(args)
+    for a in args:
+        if not isinstance(a, sp.Symbol):
+            raise InvalidInputError(f"expected the arguments to be SymPy symbols, got {a!r}")
+    if len(set(args)) != len(args):
+        raise InvalidInputError(f"expected distinct arguments, got {[str(a) for a in args]}")
+    free = set().union(*(e.free_symbols for e in flat)) if flat else set()
+    missing = sorted(str(s) for s in free - set(args))
+    if missing:
+        raise InvalidInputError(f"expected the arguments to include every free symbol, got {', '.join(missing)} missing")
+    return args
+
+
+_PY_RESERVED = {"numpy", "_values", "_shape"}
+
+
+def to_python_source(exprs: Any, args: Sequence[Any] | None = None, name: str = "f", *, doc: str = "",
+                     imports: bool = True) -> str:
+    """Source of a standalone NumPy function ``name(*args)`` evaluating ``exprs`` (scalar or Matrix).
+
+    ``import numpy`` (unless ``imports=False``), then the function: its docstring starts with
+    ``doc`` and lists the arguments in order (default :func:`argument_order`) with their units;
+    the body is cse'd.  A Matrix of shape S at arguments broadcasting to B gives an array B + S.
+
+    >>> import sympy as sp
+    >>> x, y = sp.symbols("x y")
+    >>> ns = {}; exec(to_python_source(sp.Matrix([x * y, sp.sin(x * y)]), [x, y], "g"), ns)
+    >>> ns["g"](2.0, 0.25).round(6).tolist()
+    [[0.5], [0.479426]]
+    """
+    from sympy.printing.numpy import NumPyPrinter
+
+    flat, shape = _flat(exprs)
+    _check_printable(flat)
+    args = _check_args(flat, argument_order(exprs) if args is None else args)
+    if not name.isidentifier() or keyword.iskeyword(name):
+        raise InvalidInputError(f"expected a Python identifier for the function name, got {name!r}")
+    names = _identifiers(args, _PY_RESERVED | {name})
+    plain = {a: sp.Symbol(names[a]) for a in args}
+    repl, reduced = sp.cse([e.xreplace(plain) for e in flat], symbols=sp.numbered_symbols("_x"))
+    printer = NumPyPrinter({"fully_qualified_modules": True, "allow_unknown_functions": False})
+    body = [f"    {s} = {printer.doprint(e)}" for s, e in repl]
+    entries = [printer.doprint(e) for e in reduced]
+    if shape:
+        body.append("    _values = numpy.broadcast_arrays(" +
+                    ", ".join(f"numpy.asarray({e}, dtype=float)" for e in entries) + ")")
+        body.append(f"    return numpy.stack(_values, axis=-1).reshape(_values[0].shape + {shape!r})")
+        returns = f"float array of shape (*broadcast, {', '.join(map(str, shape))}), entries row-major"
+    else:
+        body.append(f"    return numpy.asarray({entries[0]}, dtype=float)")
+        returns = "float array of the arguments' broadcast shape"
+    lines = (doc.rstrip().splitlines() + [""]) if doc else []
+    lines += ["Arguments, in order (any consistent units):", *_argument_lines(args, names, "    "), "",
+              f"Returns a {returns}.", "Generated by mechderive from its SymPy derivation (cse'd)."]
+    docstring = ['    """' + lines[0]] + [f"    {line}" if line else "" for line in lines[1:]] + ['    """']
+    head = f"def {name}({', '.join(names[a] for a in args)}):"
+    return "\n".join((["import numpy", "", ""] if imports else []) + [head, *docstring, *body]) + "\n"
+
+
+_C_RESERVED = {
+    "auto", "break", "case", "char", "const", "continue", "default", "do", "double", "else", "enum", "extern",
+    "float", "for", "goto", "if", "inline", "int", "long", "register", "restrict", "return", "short", "signed",
+    "sizeof", "static", "struct", "switch", "typedef", "union", "unsigned", "void", "volatile", "while", "out",
+    # <math.h> (C99 and POSIX) names an argument must not shadow
+    "acos", "asin", "atan", "atan2", "cos", "sin", "tan", "cosh", "sinh", "tanh", "exp", "log", "log10", "pow",
+    "sqrt", "ceil", "floor", "fabs", "fmod", "gamma", "lgamma", "tgamma", "erf", "erfc", "j0", "j1", "jn", "y0",
+    "y1", "yn", "hypot", "cbrt", "round", "trunc", "signbit", "isnan", "isinf", "nan", "remainder", "scalb",
+}
+
+
+def to_c_source(exprs: Any, args: Sequence[Any] | None = None, name: str = "f", *, doc: str = "",
+                include: bool = True) -> str:
+    """Source of a C99 function ``void name(double arg, ..., double *out)`` writing the entries of ``exprs``.
+
+    ``out`` receives the entries row-major (one for a scalar, 9 for a 3×3 matrix); the body is
+    cse'd; a header comment (starting with ``doc``) lists the arguments in order and their units.
+    Needs ``<math.h>`` (included unless ``include=False``) and ``-lm``.
+    """
+    flat, shape = _flat(exprs)
+    _check_printable(flat)
+    args = _check_args(flat, argument_order(exprs) if args is None else args)
+    if not name.isidentifier() or name in _C_RESERVED:
+        raise InvalidInputError(f"expected a C identifier for the function name, got {name!r}")
+    names = _identifiers(args, _C_RESERVED | {name})
+    plain = {a: sp.Symbol(names[a]) for a in args}
+    repl, reduced = sp.cse([e.xreplace(plain) for e in flat], symbols=sp.numbered_symbols("cse_"))
+    layout = " x ".join(map(str, shape)) if shape else "scalar"
+    comment = ["/*"]
+    comment += [f" * {line}".rstrip() for line in doc.strip().splitlines()] if doc else []
+    comment += [" *", " * Arguments, in order (any consistent units):", *_argument_lines(args, names, " *   "),
+                f" * Output: out[0 .. {len(flat) - 1}], the {layout} result"
+                + (f" row-major: entry (i, j) at out[{shape[1]}*i + j]." if len(shape) == 2 else "."),
+                " * Generated by mechderive from its SymPy derivation (cse'd).", " */"]
+    params = ", ".join([f"double {names[a]}" for a in args] + ["double *out"])
+    body = [f"    const double {s} = {sp.ccode(e, standard='C99')};" for s, e in repl]
+    body += [f"    out[{i}] = {sp.ccode(e, standard='C99')};" for i, e in enumerate(reduced)]
+    return "\n".join(comment + (["#include <math.h>", ""] if include else []) +
+                     [f"void {name}({params})", "{", *body, "}"]) + "\n"
+
+
+# ------------------------------------------------------------------------------ JSON and documents
+def to_json(entries: Sequence[Any], *, header: Mapping[str, Any] | None = None) -> str:
+    """JSON: ``header`` and, per quantity, its description, equation, text, LaTeX, ``str`` and ``srepr``."""
+    out = dict(header or {})
+    out["quantities"] = [{
+        "name": d.name, "description": d.description, "equation": d.equation,
+        "lhs": "0" if d.is_zero_form else sp.sstr(d.lhs),
+        "text": to_text(d.value, None if d.is_zero_form else d.lhs),
+        "latex": to_latex(d.value, d.lhs if not d.is_zero_form else d.lhs),
+        "str": sp.sstr(d.value), "srepr": sp.srepr(d.value),
+    } for d in entries]
+    return json.dumps(out, indent=1, ensure_ascii=False)
+
+
+_SCIPY_EXAMPLE = '''Convention: e_a = R_ab ẽ_b (3.54), R passive; SciPy's Rotation is active and equals Rᵀ.
+Sequence {seq} {frame}-fixed is SciPy's "{scipy}" with the angles in the same order:
+
+>>> import numpy
+>>> from scipy.spatial.transform import Rotation
+>>> angles = [0.3, 0.5, 0.7]                      # (phi, theta, psi) in rad
+>>> R = {fname}(*angles)
+>>> bool(numpy.allclose(R, Rotation.from_euler("{scipy}", angles).as_matrix(){T}))
+True
+>>> bool(numpy.allclose(Rotation.from_matrix(R{T}).as_euler("{scipy}"), angles))   # and back
+True
+'''
+
+
+def _doc(d: Any, system: str, fname: str, options: Any) -> str:
+    eq = f" ({d.equation})" if d.equation else ""
+    text = f"{d.description}{eq}: {system}, quantity {d.name!r}."
+    if system == "rotation" and d.name in ("R", "A") and options is not None:
+        from .sequences import scipy_sequence
+
+        text += "\n\n" + _SCIPY_EXAMPLE.format(seq=options.get("sequence", "ZXZ"), frame=options.get("frame", "body"),
+                                                scipy=scipy_sequence(options.get("sequence", "ZXZ"),
+                                                                     options.get("frame", "body")),
+                                                fname=fname, T=".T" if d.name == "R" else "")
+    return text
+
+
+def render(entries: Sequence[Any], fmt: str = "text", *, system: str = "", summary: str = "",
+           options: Mapping[str, Any] | None = None, cse: bool = False) -> str:
+    """``entries`` (:class:`~mechderive.derive.api.Derived`) as one document in format ``fmt``.
+
+    ``options`` (sequence, frame, …) go into headers; ``cse`` prints text and LaTeX with common
+    subexpressions pulled out (code is always cse'd).
+    """
+    if fmt not in FORMATS:
+        raise InvalidInputError(f"expected a format among {', '.join(FORMATS)}, got {fmt!r}")
+    opts = {k: v for k, v in (options or {}).items() if v not in (None, {}, False)}
+    where = ", ".join(f"{k}={v}" for k, v in opts.items())
+    title = f"{system}: {summary}" + (f" [{where}]" if where else "")
+    if fmt == "json":
+        return to_json(entries, header={"system": system, "summary": summary, "options": {k: str(v) for k, v in opts.items()}})
+    if fmt == "sympy":
+        src = to_sympy_source({d.name: d.value for d in entries},
+                              comments={d.name: f"{d.description} ({d.equation})" for d in entries})
+        return f"# {title}\n# SymPy objects derived by mechderive; exec() this to rebuild them exactly.\n{src}\n"
+    if fmt == "python":
+        parts = [f'"""{title}.\n\nGenerated by mechderive from its SymPy derivations."""\n\nimport numpy\n']
+        for d in entries:
+            fname = f"{system}_{d.name}"
+            parts.append("\n" + to_python_source(d.value, None, fname, doc=_doc(d, system, fname, opts), imports=False))
+        return "\n".join(parts)
+    if fmt == "c":
+        parts = [f"/* {title}.  Generated by mechderive from its SymPy derivations. */\n\n#include <math.h>\n"]
+        for d in entries:
+            fname = f"{system}_{d.name}"
+            parts.append(to_c_source(d.value, None, fname, doc=_doc(d, system, fname, None), include=False))
+        return "\n".join(parts)
+    latex = fmt == "latex"
+    mark = "%" if latex else "#"
+    blocks = [f"{mark} {title}" + ("\n% Generated by mechderive; needs \\usepackage{amsmath}." if latex else "")]
+    for d in entries:
+        eq = f" ({d.equation})" if d.equation else ""
+        body = _text_block(d, cse, latex)
+        if latex:
+            body = f"\\begin{{equation}}\n{body}\n\\end{{equation}}"
+        blocks.append(f"{mark} {d.name}: {d.description}{eq}\n{body}")
+    return "\n\n".join(blocks) + "\n"

@@ -1,0 +1,117 @@
+"""Export to :mod:`sympy.physics.mechanics`: the heavy top (or the free top) as frames, a body and L.
+
+The body frame B is oriented from the space frame N by ``B.orient_body_fixed(N, (φ, θ, ψ), "ZXZ")``,
+and mechanics' direction cosine matrix ``B.dcm(N)`` is the chapter's R(φ, θ, ψ) = R3(ψ) R1(θ) R3(φ)
+(3.54) — both define the *passive* matrix with b_i = dcm_ij n_j, e_a = R_ab ẽ_b — checked on every
+build (exactly, by :func:`mechderive.core.simplify.is_zero`).  The coordinates are mechanics'
+``dynamicsymbols`` φ(t), θ(t), ψ(t) (its own time symbol); :func:`MechanicsModel.to_state` maps
+results to the toolkit's state symbols ``phi, phi_dot, phi_ddot, …``.
+
+The heavy top (section 3.6): a RigidBody of mass M with inertia dyadic I1 (b1b1 + b2b2) + I3 b3b3
+*about the pivot* O (mechanics takes the inertia about any point), centre of mass G at l b3 from O,
+O fixed in N, gravity −M g n3, so V = M g (r_G · n3).  L = T − V is mechanics' own
+``Lagrangian(N, body)``; :class:`sympy.physics.mechanics.LagrangesMethod` gives M q̈ = F.  The free
+top: inertia diag(I1, I2, I3) about its fixed point, no gravity.
+
+>>> m = to_mechanics("heavy_top")
+>>> from mechderive.kinematics.euler import model
+>>> (m.to_state(m.frame.dcm(m.space)) - model().state_rotation).applyfunc(sp.expand) == sp.zeros(3, 3)
+True
+>>> from mechderive.core.simplify import is_zero
+>>> from mechderive.systems.heavy_top.model import model as heavy_top
+>>> is_zero(m.to_state(m.lagrangian) - heavy_top().state_lagrangian)      # (3.62)
+True
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import sympy as sp
+
+from ..core.symbols import state_symbol
+from ..errors import DerivationError, InvalidInputError
+
+__all__ = ["MechanicsModel", "to_mechanics", "SYSTEMS"]
+
+#: Systems that can be exported.
+SYSTEMS = ("heavy_top", "free_top")
+
+
+@dataclass(frozen=True)
+class MechanicsModel:
+    """A :mod:`sympy.physics.mechanics` model: frames, pivot, body, Lagrangian and its LagrangesMethod."""
+
+    space: Any          #: N, the space frame {ẽ_a}
+    frame: Any          #: B, the body frame {e_a}
+    pivot: Any          #: O, the fixed point
+    body: Any           #: the RigidBody
+    coordinates: tuple  #: (φ(t), θ(t), ψ(t)) as mechanics dynamicsymbols
+    lagrangian: Any     #: L = T − V, mechanics' Lagrangian(N, body) − V
+    method: Any         #: LagrangesMethod(L, coordinates), equations formed
+
+    def to_state(self, expr: Any) -> Any:
+        """``expr`` with q(t), q̇(t), q̈(t) replaced by the toolkit's symbols q, q_dot, q_ddot."""
+        from sympy.physics.mechanics import dynamicsymbols
+
+        t = dynamicsymbols._t
+        subs = {}
+        for q in self.coordinates:
+            name = q.func.__name__
+            subs[q.diff(t, 2)] = state_symbol(name + "_ddot")
+            subs[q.diff(t)] = state_symbol(name + "_dot")
+        out = sp.sympify(expr).subs(subs)
+        return out.subs({q: state_symbol(q.func.__name__) for q in self.coordinates})
+
+    def mass_matrix(self) -> sp.Matrix:
+        """Mechanics' mass matrix M of M q̈ = F, in the toolkit's symbols."""
+        return self.to_state(self.method.mass_matrix)
+
+    def forcing(self) -> sp.Matrix:
+        """Mechanics' forcing F of M q̈ = F, in the toolkit's symbols."""
+        return self.to_state(self.method.forcing)
+
+
+def to_mechanics(system: str = "heavy_top") -> MechanicsModel:
+    """Build ``system`` ("heavy_top" or "free_top") in :mod:`sympy.physics.mechanics` (module docstring).
+
+    Uses the toolkit's parameter symbols (``I1 I3 M g l`` of the heavy top; ``I1 I2 I3`` of the free
+    top), so results compare directly with :mod:`mechderive.systems`.
+    """
+    if system not in SYSTEMS:
+        raise InvalidInputError(f"expected a system among {', '.join(SYSTEMS)}, got {system!r}")
+    from sympy.physics.mechanics import (LagrangesMethod, Lagrangian, Point, ReferenceFrame, RigidBody,
+                                         dynamicsymbols, inertia)
+
+    from ..core.simplify import is_zero
+    from ..kinematics.euler import model as kinematics
+
+    q = dynamicsymbols("phi theta psi", real=True)
+    N = ReferenceFrame("N")
+    B = ReferenceFrame("B")
+    B.orient_body_fixed(N, tuple(q), "ZXZ")
+    R = kinematics().state_rotation
+    chapter = R.subs({state_symbol(n): qi for n, qi in zip(("phi", "theta", "psi"), q)}, simultaneous=True)
+    if not all(is_zero(e) for e in B.dcm(N) - chapter):
+        raise DerivationError("expected mechanics' B.dcm(N) to equal the chapter's R(φ, θ, ψ) (3.54)")
+    O = Point("O")
+    O.set_vel(N, 0)
+    if system == "heavy_top":
+        from ..systems.heavy_top.model import I1, I3, M, g, l
+
+        G = O.locatenew("G", l * B.z)
+        G.v2pt_theory(O, N, B)
+        body = RigidBody("top", G, B, M, (inertia(B, I1, I1, I3), O))
+        body.potential_energy = M * g * G.pos_from(O).dot(N.z)
+    else:
+        from ..systems.free_top.model import I1, I2, I3
+
+        M = sp.Symbol("M", positive=True)
+        G = O.locatenew("G", 0 * B.z)
+        G.v2pt_theory(O, N, B)
+        body = RigidBody("body", G, B, M, (inertia(B, I1, I2, I3), O))
+    L = Lagrangian(N, body)
+    method = LagrangesMethod(L, list(q), frame=N)
+    method.form_lagranges_equations()
+    return MechanicsModel(N, B, O, body, tuple(q), L, method)
