@@ -1,0 +1,103 @@
+"""``mechderive check``: decide a user's formula against a system's derived model.
+
+Exit status: 0 identity or on-shell, 1 false, 2 input error, 3 undecided.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+from ..errors import InvalidInputError
+
+_EPILOG = """\
+syntax: plain maths, e.g. 'p_psi = I3*(psi_dot + cos(theta)*phi_dot)'; ^ means **; functions
+sin cos tan asin acos atan atan2 sinh cosh tanh exp log sqrt Abs; dt(expr) is the total time
+derivative; pi; Euler's number is exp(1).  A claim starting with '-' goes after '--'.
+
+verdicts: identity (holds at every state, derivatives independent), on-shell (holds along every
+motion), false (with a counterexample), undecided.  Exit status 0, 0, 1, 3; 2 for an input error.
+
+examples:
+  mechderive check heavy_top --symbols
+  mechderive check heavy_top 'dt(E) = 0'
+  mechderive check heavy_top 'phi_dot = (b - a*cos(theta))/sin(theta)**2'
+  mechderive check free_top 'dt(omega1) = Omega*omega2' --given 'I2 = I1' --given 'Omega = omega3*(I1 - I3)/I1'
+"""
+
+
+def add_parser(sub: "argparse._SubParsersAction") -> None:
+    p = sub.add_parser(
+        "check",
+        help="decide whether a formula is an identity, holds on every motion, or is false",
+        description="Decide a claim 'LHS = RHS' about a system (heavy_top or free_top) against the "
+        "toolkit's derived model: exactly where possible, else at random points with 30/60-digit arithmetic.",
+        epilog=_EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument("system", metavar="SYSTEM", help="heavy_top or free_top")
+    p.add_argument("claim", metavar="CLAIM", nargs="?", help="the claim 'LHS = RHS'")
+    p.add_argument("--given", metavar="'NAME = EXPR'", action="append", default=[],
+                   help="define a new name, or specialise a state variable or parameter (repeatable)")
+    p.add_argument("--symbols", action="store_true", help="list the system's symbols with their meanings")
+    p.add_argument("--json", action="store_true",
+                   help="print {verdict, method, detail, counterexample?} as JSON")
+    p.add_argument("--points", type=int, default=20, help="random points of the numeric method (≥ 20; default 20)")
+    p.add_argument("--seed", type=int, default=20261121, help="seed of the random points")
+    p.add_argument("--budget", type=float, default=5.0,
+                   help="seconds allowed for each symbolic simplification (default 5)")
+    p.set_defaults(run=run)
+
+
+def _print_symbols(system, as_json: bool) -> None:
+    rows = system.describe()
+    if as_json:
+        json.dump([{"name": n, "kind": k, "meaning": m} for n, k, m in rows], sys.stdout, indent=1, ensure_ascii=False)
+        print()
+        return
+    print(f"{system.name}: {system.summary}")
+    width = max(len(n) for n, _, _ in rows)
+    for n, k, m in rows:
+        print(f"  {n:<{width}}  {k:<10}  {m}")
+    print("  pi          constant")
+
+
+def _print_verdict(v) -> None:
+    print(f"{v.verdict} ({v.method})")
+    print(f"  {v.detail}")
+    if v.counterexample:
+        c = v.counterexample
+        point = ", ".join(f"{k} = {x}" for k, x in c["point"].items())
+        print("  counterexample: " + (point or "(both sides are constants)"))
+        if "given" in c:
+            print("    given: " + ", ".join(f"{k} = {x}" for k, x in c["given"].items()))
+        print(f"    LHS = {c['lhs']}")
+        print(f"    RHS = {c['rhs']}")
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..formulas import check, get_system
+
+    try:
+        system = get_system(args.system)
+        if args.symbols:
+            _print_symbols(system, args.json)
+            if args.claim is None:
+                return 0
+        if args.claim is None:
+            raise InvalidInputError("expected a claim like 'dt(E) = 0' (or --symbols), got none")
+        verdict = check(args.claim, args.system, given=args.given, points=args.points, seed=args.seed,
+                        budget=args.budget)
+    except InvalidInputError as exc:
+        if args.json:
+            json.dump({"verdict": "error", "method": "none", "detail": str(exc)}, sys.stdout, ensure_ascii=False)
+            print()
+            return 2
+        raise
+    if args.json:
+        json.dump(verdict.as_dict(), sys.stdout, indent=1, ensure_ascii=False)
+        print()
+    else:
+        _print_verdict(verdict)
+    return verdict.exit_status

@@ -1,0 +1,294 @@
+"""``mechderive check``: formulas from the chapter and other standard treatments, right and wrong.
+
+Every case states its source and the verdict it must get: identities (after the systems'
+derived definitions are substituted), on-shell claims (true along every motion), and
+deliberately wrong variants (a sign, a factor 2, a swapped moment) that must come out false
+with a counterexample.  Then the safe parser against hostile input, the --given rules, and
+the command line's exit statuses.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+
+import pytest
+
+from mechderive.cli import main
+from mechderive.errors import InvalidInputError
+from mechderive.formulas import check, get_system, parse_claim, parse_expression
+from mechderive.formulas.check import EXIT_STATUS
+
+HEAVY = "heavy_top"
+FREE = "free_top"
+
+# (system, claim, given, verdict, source)
+CASES = [
+    # --- the heavy symmetric top, section 3.6 ---------------------------------------------------
+    (HEAVY, "p_psi = I3*(psi_dot + cos(theta)*phi_dot)", [], "identity", "(3.63)"),
+    (HEAVY, "p_psi = 2*I3*(psi_dot + cos(theta)*phi_dot)", [], "false", "(3.63) with a factor 2"),
+    (HEAVY, "p_phi = I1*sin(theta)**2*phi_dot + I3*cos(theta)*(psi_dot + phi_dot*cos(theta))", [], "identity",
+     "(3.64)"),
+    (HEAVY, "p_phi = (I1*sin(theta)**2 + I3*cos(theta)**2)*phi_dot + I3*psi_dot*cos(theta)", [], "identity",
+     "Goldstein's p_φ"),
+    (HEAVY, "p_phi = I3*sin(theta)**2*phi_dot + I1*cos(theta)*(psi_dot + phi_dot*cos(theta))", [], "false",
+     "(3.64) with I1, I3 swapped"),
+    (HEAVY, "E = I1/2*(theta_dot**2 + phi_dot**2*sin(theta)**2) + I3/2*omega3**2 + M*g*l*cos(theta)", [],
+     "identity", "(3.65)"),
+    (HEAVY, "E = I1/2*(theta_dot**2 + phi_dot**2*sin(theta)**2) + I3/2*omega3**2 - M*g*l*cos(theta)", [],
+     "false", "(3.65) with the sign of V flipped"),
+    (HEAVY, "omega1 = phi_dot*sin(theta)*sin(psi) + theta_dot*cos(psi)", [], "identity", "(3.58)"),
+    (HEAVY, "omega1 = phi_dot*sin(theta)*cos(psi) + theta_dot*sin(psi)", [], "false", "(3.58) sin/cos ψ swapped"),
+    (HEAVY, "phi_dot = (b - a*cos(theta))/sin(theta)**2", [], "identity", "(3.67)"),
+    (HEAVY, "psi_dot = I1*a/I3 - (b - a*cos(theta))*cos(theta)/sin(theta)**2", [], "identity", "(3.68)"),
+    (HEAVY, "E_prime = I1/2*theta_dot**2 + I1*(b - a*cos(theta))**2/(2*sin(theta)**2) + M*g*l*cos(theta)", [],
+     "identity", "(3.69)-(3.70)"),
+    (HEAVY, "E_prime = I1/2*theta_dot**2 + (p_phi - p_psi*cos(theta))**2/(2*I1*sin(theta)**2) + M*g*l*cos(theta)",
+     [], "identity", "Landau–Lifshitz §35, the heavy top's E'"),
+    (HEAVY, "u_dot**2 = (1 - u**2)*(alpha - beta*u) - (b - a*u)**2", [], "identity", "(3.73)"),
+    (HEAVY, "u_dot^2 = (1 - u^2)*(alpha - beta*u) + (b - a*u)^2", [], "false", "(3.73) with a sign flipped"),
+    (HEAVY, "phi_dot = (b - a*u)/(1 - u**2)", [], "identity", "(3.74)"),
+    (HEAVY, "psi_dot = I1*a/I3 - u*(b - a*u)/(1 - u**2)", [], "identity", "(3.75)"),
+    (HEAVY, "u_ddot = (-2*u*(alpha - beta*u) - beta*(1 - u**2) + 2*a*(b - a*u))/2", [], "on-shell",
+     "ü = f'(u)/2, from (3.73) and (3.79)"),
+    (HEAVY, "dt(E) = 0", [], "on-shell", "energy conservation"),
+    (HEAVY, "dt(p_phi) = 0", [], "on-shell", "φ ignorable"),
+    (HEAVY, "dt(p_psi) = 0", [], "on-shell", "ψ ignorable"),
+    (HEAVY, "dt(alpha) = 0", [], "on-shell", "E' conserved"),
+    (HEAVY, "dt(theta_dot) = 0", [], "false", "θ̇ is not conserved"),
+    (HEAVY, "I1*theta_ddot = I1*phi_dot**2*sin(theta)*cos(theta) - I3*omega3*phi_dot*sin(theta) + M*g*l*sin(theta)",
+     [], "on-shell", "Goldstein's θ equation"),
+    (HEAVY, "I1*theta_ddot = I1*phi_dot**2*sin(theta)*cos(theta) - I3*omega3*phi_dot*sin(theta) - M*g*l*sin(theta)",
+     [], "false", "Goldstein's θ equation, gravity's sign flipped"),
+    (HEAVY, "Lagrangian = (I1_cm + M*l**2)/2*(theta_dot**2 + phi_dot**2*sin(theta)**2)"
+            " + I3/2*(psi_dot + phi_dot*cos(theta))**2 - M*g*l*cos(theta)",
+     ["I1_cm = I1 - M*l**2"], "identity", "Goldstein's L with I1 about the centre of mass"),
+    (HEAVY, "Lagrangian = I1_cm/2*(theta_dot**2 + phi_dot**2*sin(theta)**2)"
+            " + I3/2*(psi_dot + phi_dot*cos(theta))**2 - M*g*l*cos(theta)",
+     ["I1_cm = I1 - M*l**2"], "false", "the same, parallel-axis term forgotten"),
+    (HEAVY, "a = b", ["theta = 0"], "identity", "the sleeping top, 3.6.3"),
+    (HEAVY, "alpha = beta", ["theta = 0", "theta_dot = 0"], "identity", "the sleeping top, 3.6.3"),
+    (HEAVY, "sqrt(1 - u**2) = sin(theta)", [], "identity", "sin θ ≥ 0 for 0 < θ < π"),
+    # --- the free rigid body, sections 3.3-3.4 ----------------------------------------------------
+    (FREE, "I1*dt(omega1) = (I2 - I3)*omega2*omega3", [], "on-shell", "(3.33)"),
+    (FREE, "I1*dt(omega1) = (I3 - I2)*omega2*omega3", [], "false", "(3.33) with I2, I3 swapped"),
+    (FREE, "I3*omega3_dot + omega1*omega2*(I2 - I1) = 0", [], "on-shell", "(3.33), third"),
+    (FREE, "dt(T) = 0", [], "on-shell", "(3.46) conserved"),
+    (FREE, "dt(Lsq) = 0", [], "on-shell", "(3.47) conserved"),
+    (FREE, "dt(omega1**2 + omega2**2 + omega3**2) = 0", [], "false", "|ω| is not conserved"),
+    (FREE, "I1*omega1**2 + I2*omega2**2 + I3*omega3**2 = 2*T", [], "identity", "ω·L = 2T, (3.46)/(3.49)"),
+    (FREE, "dt(omega1) = Omega*omega2", ["I2 = I1", "Omega = omega3*(I1 - I3)/I1"], "on-shell", "(3.35)-(3.36)"),
+    (FREE, "dt(omega1) = Omega*omega2", ["I2 = I1", "Omega = omega3*(I3 - I1)/I1"], "false",
+     "(3.36) with the sign flipped"),
+    (FREE, "dt(dt(omega1)) = -Omega**2*omega1", ["I2 = I1", "Omega = omega3*(I1 - I3)/I1"], "on-shell",
+     "the symmetric top's ω1 oscillates at Ω (3.37)"),
+    (FREE, "dt(omega3) = 0", ["I2 = I1"], "on-shell", "(3.34): ω3 constant"),
+]
+
+
+@pytest.mark.parametrize("system, claim, given, expected, source", CASES, ids=[c[4] for c in CASES])
+def test_verdicts(system, claim, given, expected, source):
+    v = check(claim, system, given=given)
+    assert v.verdict == expected, (source, v)
+    if expected == "false":
+        c = v.counterexample
+        assert c is not None and c["point"] and c["lhs"] != c["rhs"]
+        assert v.exit_status == 1
+    else:
+        assert v.counterexample is None and v.exit_status == 0
+
+
+def test_enough_cases():
+    assert len(CASES) >= 20
+    assert {c[3] for c in CASES} == {"identity", "on-shell", "false"}
+
+
+def test_methods_say_proven_or_numeric():
+    exact = check("phi_dot = (b - a*cos(theta))/sin(theta)**2")
+    assert exact.method == "exact" and exact.detail.startswith("proven")
+    assert "definitions used: a, b" in exact.detail
+    numeric = check("sqrt(1 - u**2) = sin(theta)")
+    assert numeric.method == "numeric" and numeric.detail.startswith("not proven")
+    assert "probability of a false positive <" in numeric.detail
+
+
+def test_counterexample_values_are_the_two_sides():
+    v = check("p_psi = 2*I3*(psi_dot + cos(theta)*phi_dot)")
+    c = v.counterexample
+    assert float(c["rhs"]) == pytest.approx(2 * float(c["lhs"]), rel=1e-25)
+    assert set(c["point"]) == {"I3", "theta", "phi_dot", "psi_dot"}
+    assert len(c["lhs"].replace("-", "").replace(".", "")) >= 25  # shown to 30 digits
+
+
+def test_tiny_errors_are_not_passed():
+    """No float tolerance hides a wrong formula: exact for trig-rational, 60-digit re-check otherwise."""
+    assert check("p_psi = I3*omega3 + 10**(-30)").verdict == "false"
+    v = check("sqrt(1 - u**2) = sin(theta) + 10**(-40)")
+    assert v.verdict == "false" and v.counterexample is not None
+
+
+def test_typed_approximations_of_constants_are_not_passed():
+    """A 60-digit decimal of π agrees with π at 60 digits: the confirming precision grows with the digits typed."""
+    pi60 = "3.14159265358979323846264338327950288419716939937510582097494"
+    assert check(f"pi = {pi60}").verdict == "false"
+    assert check(f"pi*sin(theta) = {pi60}*sin(theta)").verdict == "false"
+    assert check("pi = 4*atan(1)").verdict == "identity"
+
+
+def test_on_shell_counterexample_is_on_a_motion():
+    v = check("dt(theta_dot) = 0", given=["theta_dot = 0"])
+    assert v.verdict == "false" and "on a motion" in v.detail
+    assert v.counterexample["given"] == {"theta_dot": "0"}
+    assert "theta_dot" not in v.counterexample["point"]
+
+
+def test_undecided():
+    v = check("sqrt(-1 - theta_dot**2) = 1")
+    assert v.verdict == "undecided" and "non-real" in v.detail and v.exit_status == 3
+    singular = check("phi_dot = (b - a*cos(theta))/sin(theta)**2", given=["theta = 0"])
+    assert singular.verdict == "undecided" and "singular" in singular.detail
+
+
+def test_symbols_are_derived_definitions():
+    heavy = get_system(HEAVY)
+    assert str(heavy.definition(heavy.symbol("u_dot"))) == "-theta_dot*sin(theta)"
+    names = {n for n, _, _ in heavy.describe()}
+    assert {"a", "b", "alpha", "beta", "u", "u_dot", "p_phi", "p_psi", "E", "omega1", "theta_ddot"} <= names
+    free = {n for n, _, _ in get_system(FREE).describe()}
+    assert {"omega1", "omega1_dot", "I2", "T", "Lsq"} <= free and "L2" not in free
+
+
+# --- the safe parser -----------------------------------------------------------------------------
+
+HOSTILE = [
+    ("__import__('os').system('echo hi') = 0", "call of"),
+    ("().__class__.__bases__[0] = 0", "subscript"),
+    ("theta.__class__ = 0", "attribute access"),
+    ("theta**10**10 = 0", "exponent"),
+    ("9**9**9 = 0", "exponent"),
+    ("theta**theta = 0", "numeric exponent"),
+    ("x" * 10**6, "at most 2000 characters"),
+    ("(" * 100 + "theta" + ")" * 100 + " = 0", "nested at most"),
+    ("-" * 1500 + "theta = 0", "nested at most"),
+    ("eval('1') = 0", "call of 'eval'"),
+    ("(lambda: 1)() = 0", "call of"),
+    ("lambda: 1 = 0", "a lambda"),
+    ("[t for t in theta] = 0", "comprehension"),
+    ("sin(x=theta) = 0", "exactly one '='"),
+    ("'theta' = 0", "string"),
+    ("foo = 0", "unknown symbol 'foo' .* known symbols: .*theta"),
+    (r"\frac{1}{2} = 0", "antlr4-python3-runtime"),
+    ("1e999999 = 0", "decimal exponent"),
+    ("(10**100)**100 = 0", "below 10\\^1000"),
+    ("theta/0 = 0", "division by zero"),
+    ("theta // 2 = 0", "operator"),
+    ("theta < 1 = 0", "comparison"),
+    ("2theta = 0", "syntax error"),
+]
+
+
+@pytest.mark.parametrize("text, message", HOSTILE, ids=[h[1] for h in HOSTILE])
+def test_hostile_input_refused_fast(text, message):
+    get_system(HEAVY)  # the symbol table (cheap), built before timing
+    start = time.perf_counter()
+    with pytest.raises(InvalidInputError, match=message):
+        check(text, HEAVY)
+    assert time.perf_counter() - start < 0.05
+
+
+def test_keyword_arguments_refused():
+    with pytest.raises(InvalidInputError, match="keyword arguments in 'sin\\(x=theta\\)'"):
+        parse_expression("sin(x=theta)", get_system(HEAVY).names)
+
+
+@pytest.mark.parametrize("text, message", [
+    ("theta", "exactly one '='"),
+    ("theta == 0", "got '=='"),
+    ("a = b = c", "exactly one '='"),
+    ("E = 0", None),
+])
+def test_claim_syntax(text, message):
+    if message is None:
+        lhs, rhs = parse_claim(text, get_system(HEAVY).names)
+        assert str(lhs) == "E" and rhs == 0
+    else:
+        with pytest.raises(InvalidInputError, match=message):
+            check(text, HEAVY)
+
+
+def test_caret_is_power_with_power_precedence():
+    lhs, rhs = parse_claim("theta + theta_dot^2 = -theta^2", get_system(HEAVY).names)
+    assert str(lhs) == "theta + theta_dot**2" and str(rhs) == "-theta**2"
+
+
+def test_decimals_are_exact():
+    lhs, _ = parse_claim("0.1*theta = 0", get_system(HEAVY).names)
+    assert str(lhs) == "theta/10"
+
+
+@pytest.mark.parametrize("given, message", [
+    (["a = 1"], "the defined quantity 'a'"),
+    (["theta_ddot = 0"], "the time derivative 'theta_ddot'"),
+    (["theta_dot = 2*theta_dot"], "not to depend on theta_dot"),
+    (["w = 1", "w = 2"], "defined once"),
+    (["2*x = 1"], "plain name on the left"),
+    (["sin = 1"], "not a function"),
+    (["theta_dot = theta_ddot"], "in the state and the parameters"),
+    (["theta_dot = dt(theta)"], "without dt"),
+    (["x"], "one '='"),
+    (["I1 = -1"], "expected a positive value for I1, got -1"),
+])
+def test_given_rules(given, message):
+    with pytest.raises(InvalidInputError, match=message):
+        check("E = E", HEAVY, given=given)
+
+
+def test_hints_for_clashing_names():
+    with pytest.raises(InvalidInputError, match=r"'L2' \(L² is Lsq"):
+        check("dt(L2) = 0", FREE)
+    with pytest.raises(InvalidInputError, match="energy of the free top is T"):
+        check("dt(E) = 0", FREE)
+    with pytest.raises(InvalidInputError, match="write a time derivative as dt"):
+        check("diff(E, t) = 0", HEAVY)
+
+
+def test_bad_options():
+    with pytest.raises(InvalidInputError, match="expected a system among free_top, heavy_top, got 'spinning'"):
+        check("E = E", "spinning")
+    with pytest.raises(InvalidInputError, match="expected points between 20 and 1000, got 5"):
+        check("E = E", HEAVY, points=5)
+
+
+# --- the command line ------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("argv, status", [
+    (["check", "heavy_top", "p_psi = I3*(psi_dot + cos(theta)*phi_dot)"], 0),
+    (["check", "heavy_top", "dt(E) = 0"], 0),
+    (["check", "heavy_top", "dt(theta_dot) = 0"], 1),
+    (["check", "heavy_top", "foo = 0"], 2),
+    (["check", "heavy_top", "__import__('os').system('echo hi') = 0"], 2),
+    (["check", "spinning", "E = 0"], 2),
+    (["check", "heavy_top"], 2),
+    (["check", "heavy_top", "sqrt(-1 - theta_dot**2) = 1"], 3),
+    (["check", "free_top", "dt(omega1) = Omega*omega2", "--given", "I2 = I1",
+      "--given", "Omega = omega3*(I1 - I3)/I1"], 0),
+])
+def test_cli_exit_status(argv, status, capsys):
+    assert main(argv) == status
+
+
+def test_cli_json(capsys):
+    assert main(["check", "heavy_top", "dt(theta_dot) = 0", "--json"]) == 1
+    out = json.loads(capsys.readouterr().out)
+    assert out["verdict"] == "false" and set(out) == {"verdict", "method", "detail", "counterexample"}
+    assert main(["check", "heavy_top", "foo = 0", "--json"]) == 2
+    err = json.loads(capsys.readouterr().out)
+    assert err["verdict"] == "error" and "unknown symbol 'foo'" in err["detail"]
+
+
+def test_cli_symbols(capsys):
+    assert main(["check", "free_top", "--symbols"]) == 0
+    out = capsys.readouterr().out
+    assert "Lsq" in out and "L² = Σ I_a² ω_a² (3.47)" in out
+    assert EXIT_STATUS == {"identity": 0, "on-shell": 0, "false": 1, "undecided": 3}
