@@ -11,6 +11,12 @@ Examples::
     mechderive derive inertia solid_cone --pivot 0
     mechderive derive heavy_top --list
 
+Formats: ``text`` (unicode), ``latex`` (equation environments for amsmath, dots for rates),
+``sympy`` (Python source rebuilding the exact SymPy objects: symbols with their assumptions, then
+each object's ``str`` form with exact integers), ``python`` (standalone NumPy functions, cse'd,
+argument order and units in each docstring; ``rotation``'s docstring shows the SciPy conversion),
+``c`` (C99 functions writing to ``double *out``), ``json`` (text, LaTeX, str and srepr of each).
+
 Nothing is imported from SymPy until the command runs.
 """
 

@@ -32,6 +32,8 @@ class Derived:
     equation: str
     lhs: Any
     value: Any
+    sequence: str = "ZXZ"   #: the Euler sequence the value is expressed in
+    frame: str = "body"     #: its body-fixed or space-fixed axes
 
     @property
     def is_zero_form(self) -> bool:
@@ -102,7 +104,7 @@ def derive_entries(system_name: str, quantities: Iterable[str] | None = None, *,
         qs = spec.quantities[q]
         value = _apply(qs.build(options), subs)
         lhs = qs.lhs if qs.lhs is ZERO else qs.lhs()
-        out.append(Derived(q, qs.description, qs.equation, lhs, value))
+        out.append(Derived(q, qs.description, qs.equation, lhs, value, options.sequence, options.frame))
     if options.values:
         present = set().union(*(_free_names(d.value) for d in out))
         missing = sorted(set(options.values) - present)

@@ -223,7 +223,7 @@ _CAT = {
                            lambda o: _cat().connection[0], lambda: sp.Symbol("Omega_bend")),
     "Omega_swivel": Quantity("gauge potential Ω_A for A = swivel", "3.87",
                              lambda o: _cat().connection[1], lambda: sp.Symbol("Omega_swivel")),
-    "field_strength": Quantity("F_AB, A = bend, B = swivel (the corrected (3.103): see catalog 3.7)", "3.103",
+    "field_strength": Quantity("F_AB, A = bend, B = swivel (as corrected in catalog 3.7)", "3.103",
                                lambda o: _cat().field_strength[0][1], lambda: sp.Symbol("F_bend,swivel")),
     "angular_velocity": Quantity("Ω = R⁻¹Ṙ = hat(Ĩ⁻¹ L̃) at L = 0", "3.92",
                                  lambda o: _cat().angular_velocity, lambda: sp.Symbol("Omega")),
