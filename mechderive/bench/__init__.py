@@ -1,0 +1,115 @@
+"""``mechderive bench``: what the toolkit buys over the usual SymPy → lambdify → solve_ivp path, measured.
+
+Five measurements (see each module's docstring for the case and what is timed):
+
+1. heavy-top work–precision (:mod:`.work_precision`): closed form, our DOP853 and splitting, and
+   the BASELINE user path (``sympy.physics.mechanics`` → ``lambdify(cse=True)`` → ``solve_ivp``),
+   warm and with its derivation cost; speed-ups at comparable error;
+2. the same, smaller, for the free asymmetric top;
+3. ensemble throughput of the vectorised splitting (:mod:`.ensemble`);
+4. cold start of ``mechderive run`` by stage in fresh processes, cold and warm disk cache
+   (:mod:`.startup`);
+5. the time saved by laziness (a scene asking for ``u`` only against one asking for everything).
+
+:func:`check_targets` compares them with the issue's targets (:mod:`.report`).  ``quick=True``:
+10 periods, fewer rows, M ≤ 100, no cache-disabled runs, and section 5 only when asked for.  Nothing here is a test: figures are
+wall-clock times on whatever machine runs them; compare rows within one run.
+"""
+
+from __future__ import annotations
+
+import datetime
+import os
+import platform
+import sys
+import tempfile
+import time
+from typing import Callable
+
+from .report import check_targets, format_report, plot_work_precision
+
+__all__ = ["run_benchmarks", "format_report", "plot_work_precision", "check_targets", "SECTIONS"]
+
+SECTIONS = ("heavy_top", "free_top", "ensemble", "cold_start", "laziness")
+
+
+def _versions() -> dict:
+    from importlib.metadata import PackageNotFoundError, version
+
+    out = {}
+    for dist in ("numpy", "scipy", "sympy", "mpmath"):
+        try:
+            out[dist] = version(dist)
+        except PackageNotFoundError:
+            out[dist] = "not installed"
+    return out
+
+
+def _load() -> str:
+    try:
+        return " ".join(f"{x:.2f}" for x in os.getloadavg())
+    except OSError:  # pragma: no cover - not on every platform
+        return "n/a"
+
+
+def run_benchmarks(*, quick: bool = False, sections: tuple[str, ...] | None = None,
+                   log: Callable[[str], None] | None = None) -> dict:
+    """Run the benchmark ``sections`` and return every figure as plain data (JSON-ready), with the targets.
+
+    ``sections`` defaults to all of :data:`SECTIONS`, except ``laziness`` when ``quick`` (it needs a
+    cold derivation of every heavy-top quantity, ~5-10 s; name it to have it anyway).
+    """
+    if sections is None:
+        sections = tuple(s for s in SECTIONS if not (quick and s == "laziness"))
+    unknown = [s for s in sections if s not in SECTIONS]
+    if unknown:
+        raise ValueError(f"expected sections among {', '.join(SECTIONS)}, got {unknown[0]!r}")
+    say = log or (lambda _msg: None)
+    seconds: dict[str, float] = {}
+    clock = [time.perf_counter()]
+
+    def lap(name: str) -> None:
+        now = time.perf_counter()
+        seconds[name] = round(now - clock[0], 3)
+        clock[0] = now
+
+    repeat = 1 if quick else 3
+    result: dict = {"meta": dict(date=datetime.datetime.now().isoformat(timespec="minutes"), quick=quick,
+                                 sections=list(sections),
+                                 machine=f"{platform.machine()}, {os.cpu_count()} CPUs, {platform.system()}",
+                                 python=platform.python_version(), versions=_versions(), load_before=_load())}
+    if "heavy_top" in sections:
+        from .work_precision import heavy_top_work_precision
+
+        say("heavy top: work-precision (closed form, DOP853, splitting, baseline user path) ...")
+        result["heavy_top"] = heavy_top_work_precision(quick=quick, repeat=repeat)
+        lap("heavy_top")
+    if "free_top" in sections:
+        from .work_precision import free_top_work_precision
+
+        say("free top: work-precision ...")
+        result["free_top"] = free_top_work_precision(quick=quick, repeat=repeat)
+        lap("free_top")
+    if "ensemble" in sections:
+        from .ensemble import ensemble_throughput
+
+        say("ensembles: throughput ...")
+        result["ensemble"] = ensemble_throughput(quick=quick)
+        lap("ensemble")
+    if "cold_start" in sections or "laziness" in sections:
+        from .startup import cold_start, laziness
+
+        with tempfile.TemporaryDirectory(prefix="mechderive-bench-cache-") as cache:
+            if "cold_start" in sections:
+                say("mechderive run: cold and warm start in fresh processes ...")
+                result["cold_start"] = cold_start(cache, quick=quick)
+                lap("cold_start")
+            if "laziness" in sections:
+                say("laziness: u only vs all quantities, in fresh processes ...")
+                result["laziness"] = laziness(cache, quick=quick)
+                lap("laziness")
+    result["meta"]["section_seconds"] = seconds
+    result["meta"]["load_after"] = _load()
+    result["meta"]["executable"] = sys.executable
+    result["targets"] = check_targets(result)
+    return result
