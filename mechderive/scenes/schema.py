@@ -1,0 +1,518 @@
+"""The scene file of ``mechderive run``: a TOML description of one motion to compute.
+
+A scene is DATA.  It is read with the standard library's :mod:`tomllib` and every
+value is checked against a fixed set of names and ranges; nothing in it is ever
+evaluated as code (no ``eval``, no ``sympify``), so a string such as
+``"__import__('os')"`` is only ever a wrong value, refused with a message.
+
+The format (optional keys marked)::
+
+    name = "my top"           # optional: a printable label (1-100 characters)
+    system = "heavy_top"      # "free_top" | "heavy_top" | "falling_cat"
+    method = "auto"           # optional: "auto" | "exact" | "integrate" (default "auto")
+    rtol = 1e-10              # optional: relative accuracy in [1e-15, 1e-2] (default 1e-9)
+
+    [parameters]              # heavy_top: I1 I3 M g l; free_top: I1 I2 I3; falling_cat: registered names
+    I1 = 1.0
+    ...
+
+    [initial]                 # heavy_top: theta phi psi theta_dot phi_dot psi_dot (rad, rad/s)
+    ...                       # free_top: omega = [w1, w2, w3] (body frame, rad/s), optional phi theta psi
+
+    [time]
+    t_end = 10.0              # > 0
+    samples = 1001            # equally spaced on [0, t_end], both ends included; 2 <= samples <= 10^7
+
+    [output]
+    quantities = ["theta", "phi", "psi"]   # names from QUANTITIES[system], each once
+
+Every refusal is an :class:`~mechderive.errors.InvalidInputError` (or a subclass:
+:class:`~mechderive.errors.NonFiniteValueError` for NaN/inf,
+:class:`~mechderive.errors.UnphysicalInertiaError` for moments no body can have) whose
+message names the key, the value and what is allowed, e.g.
+``scene key [parameters].I1: expected a number > 0, got -1.0``.
+
+>>> scene = load_scene('''
+... system = "free_top"
+... [parameters]
+... I1 = 1
+... I2 = 2
+... I3 = 3
+... [initial]
+... omega = [1, 0.5, 1]
+... [time]
+... t_end = 10
+... samples = 3
+... [output]
+... quantities = ["omega1", "energy"]
+... ''')
+>>> scene.parameters, scene.initial["omega"], scene.times()
+({'I1': 1.0, 'I2': 2.0, 'I3': 3.0}, (1.0, 0.5, 1.0), array([ 0.,  5., 10.]))
+>>> load_scene(scene_to_toml(scene)) == scene
+True
+"""
+
+from __future__ import annotations
+
+import datetime
+import math
+import os
+import re
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable, Iterable, Mapping
+
+import numpy as np
+
+from ..errors import InvalidInputError, NonFiniteValueError
+from ..systems.heavy_top import parameters as heavy_top_parameters
+
+__all__ = [
+    "Scene",
+    "SYSTEMS",
+    "METHODS",
+    "QUANTITIES",
+    "SYSTEM_PARAMETERS",
+    "FALLING_CAT_PARAMETERS",
+    "load_scene",
+    "parse_scene",
+    "scene_to_toml",
+    "register_system_parameters",
+    "register_system_quantities",
+]
+
+SYSTEMS = ("free_top", "heavy_top", "falling_cat")
+METHODS = ("auto", "exact", "integrate")
+DEFAULT_METHOD = "auto"
+DEFAULT_RTOL = 1e-9
+RTOL_RANGE = (1e-15, 1e-2)
+MAX_SAMPLES = 10**7
+MAX_NAME_LENGTH = 100
+MAX_SCENE_BYTES = 1_000_000  # a scene is a page of text; refuse anything far larger unread
+
+TOP_LEVEL_KEYS = ("name", "system", "method", "rtol")
+TABLES = ("parameters", "initial", "time", "output")
+TIME_KEYS = ("t_end", "samples")
+OUTPUT_KEYS = ("quantities",)
+
+_R = tuple(f"R{i}{j}" for i in (1, 2, 3) for j in (1, 2, 3))
+
+#: The quantity names a scene may ask for, per system, in a fixed order.
+QUANTITIES: dict[str, tuple[str, ...]] = {
+    "free_top": ("omega1", "omega2", "omega3", "L1", "L2", "L3", "energy", "L_norm", *_R,
+                 "phi", "theta", "psi", "q0", "q1", "q2", "q3"),
+    "heavy_top": ("theta", "phi", "psi", "theta_dot", "phi_dot", "psi_dot", "u", "energy", "p_phi", "p_psi",
+                  "omega1", "omega2", "omega3", *_R, "apex_x", "apex_y", "apex_z"),
+    "falling_cat": (*_R, "q0", "q1", "q2", "q3", "flip_angle", "L1", "L2", "L3"),
+}
+
+#: Parameters of the falling cat; a placeholder until the cat module registers its names.
+FALLING_CAT_PARAMETERS: tuple[str, ...] = ()
+
+#: The [parameters] names per system.  heavy_top and free_top need all of theirs;
+#: falling_cat's are optional and open to :func:`register_system_parameters`.
+SYSTEM_PARAMETERS: dict[str, tuple[str, ...]] = {
+    "free_top": ("I1", "I2", "I3"),
+    "heavy_top": heavy_top_parameters.PARAMETER_NAMES,
+    "falling_cat": FALLING_CAT_PARAMETERS,
+}
+_OPEN_PARAMETERS = ("falling_cat",)
+_FREE_TOP_ANGLES = ("phi", "theta", "psi")
+_INITIAL_NAMES: dict[str, tuple[str, ...]] = {
+    "free_top": ("omega", *_FREE_TOP_ANGLES),
+    "heavy_top": heavy_top_parameters.INITIAL_NAMES,
+    "falling_cat": (),
+}
+_NAME_PATTERN = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")  # a bare TOML key and a Python identifier
+
+
+# ----------------------------------------------------------------------------- messages
+
+def _show(value: Any) -> str:
+    """The value as the message shows it: short, escaped, with its TOML kind when that helps."""
+    if isinstance(value, bool):
+        return f"{str(value).lower()} (a boolean)"
+    if isinstance(value, (int, float)):
+        return repr(value)
+    if isinstance(value, str):
+        text = repr(value)
+        return text if len(text) <= 80 else text[:70] + "...' (truncated)"
+    if isinstance(value, Mapping):
+        return "a table"
+    if isinstance(value, (datetime.date, datetime.time)):
+        return f"{value.isoformat()} (a date/time)"
+    if isinstance(value, (list, tuple)):
+        text = repr(list(value))
+        return text if len(text) <= 80 else f"a list of {len(value)} items"
+    return f"a {type(value).__name__}"
+
+
+def _key_name(key: Any) -> str:
+    """A key as the message shows it: bare if it is a plain name, else quoted and escaped."""
+    if isinstance(key, str) and _NAME_PATTERN.fullmatch(key) and len(key) <= 40:
+        return key
+    return _show(key)
+
+
+def _at(table: str | None, key: Any) -> str:
+    return f"[{table}].{_key_name(key)}" if table else _key_name(key)
+
+
+def _fail(where: str, expected: str, value: Any, error: type[InvalidInputError] = InvalidInputError) -> None:
+    raise error(f"scene key {where}: expected {expected}, got {_show(value)}")
+
+
+def _one_of(names: Iterable[str]) -> str:
+    return ", ".join(names)
+
+
+# ----------------------------------------------------------------------------- value checks
+
+def _number(where: str, value: Any, *, expected: str = "a finite number",
+            valid: Callable[[float], bool] = lambda x: True) -> float:
+    """``value`` as a float; bool and non-numbers are refused, ints accepted, NaN/inf refused."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        _fail(where, expected, value)
+    x = float(value)
+    if not math.isfinite(x):
+        _fail(where, expected, x, NonFiniteValueError)
+    if not valid(x):
+        _fail(where, expected, value)
+    return x
+
+
+def _positive(where: str, value: Any) -> float:
+    return _number(where, value, expected="a number > 0", valid=lambda x: x > 0)
+
+
+def _choice(where: str, value: Any, allowed: tuple[str, ...]) -> str:
+    if not isinstance(value, str) or value not in allowed:
+        _fail(where, "one of " + ", ".join(repr(a) for a in allowed), value)
+    return value
+
+
+def _check_keys(given: Mapping[str, Any], table: str, allowed: tuple[str, ...], required: tuple[str, ...],
+                what: str) -> None:
+    for key in given:
+        if key not in allowed:
+            allowed_text = f"expected one of {_one_of(allowed)}" if allowed else "it takes none"
+            raise InvalidInputError(f"scene key {_at(table, key)}: unknown {what}; {allowed_text}")
+    for key in required:
+        if key not in given:
+            raise InvalidInputError(f"scene key {_at(table, key)}: missing; expected all of {_one_of(required)}")
+
+
+def _as_table(where: str, value: Any) -> Mapping[str, Any]:
+    if not isinstance(value, Mapping):
+        raise InvalidInputError(f"scene table {where}: expected a table, got {_show(value)}")
+    return value
+
+
+def _rename_keys(exc: InvalidInputError, table: str, names: tuple[str, ...]) -> InvalidInputError:
+    """Re-word an error of a physics check so that it names the scene keys it is about."""
+    message = str(exc)
+    claim = message.split(";")[0]  # the checked relation; later clauses are hints
+    involved = [k for k in names if re.search(rf"(?<![A-Za-z0-9_]){re.escape(k)}(?![A-Za-z0-9_])", claim)]
+    where = ("scene key" + ("s " if len(involved) > 1 else " ") + ", ".join(f"[{table}].{k}" for k in involved)
+             if involved else f"scene table [{table}]")
+    return type(exc)(f"{where}: {message}")
+
+
+# ----------------------------------------------------------------------------- per-system checks
+
+def _parameters(system: str, given: Mapping[str, Any]) -> dict[str, float]:
+    given = _as_table("[parameters]", given)
+    names = SYSTEM_PARAMETERS[system]
+    required = () if system in _OPEN_PARAMETERS else names
+    _check_keys(given, "parameters", names, required, f"parameter for system {system!r}")
+    if system in _OPEN_PARAMETERS:
+        return {k: _number(_at("parameters", k), given[k]) for k in names if k in given}
+    p = {k: _positive(_at("parameters", k), given[k]) for k in names}
+    try:
+        if system == "heavy_top":
+            heavy_top_parameters.check_parameters(p)
+        else:
+            from ..inertia.validate import check_principal_moments  # imports SymPy: only when needed
+
+            check_principal_moments(p["I1"], p["I2"], p["I3"])
+    except InvalidInputError as exc:
+        raise _rename_keys(exc, "parameters", names) from exc
+    return p
+
+
+def _initial(system: str, given: Mapping[str, Any]) -> dict[str, Any]:
+    given = _as_table("[initial]", given)
+    names = _INITIAL_NAMES[system]
+    if system == "heavy_top":
+        _check_keys(given, "initial", names, names, "initial value for system 'heavy_top'")
+        s = {k: _number(_at("initial", k), given[k]) for k in names}
+        _number("[initial].theta", s["theta"], expected="a number in [0, π]", valid=lambda x: 0 <= x <= math.pi)
+        try:
+            heavy_top_parameters.check_initial(s)
+        except InvalidInputError as exc:
+            raise _rename_keys(exc, "initial", names) from exc
+        return s
+    if system == "free_top":
+        _check_keys(given, "initial", names, ("omega",), "initial value for system 'free_top'")
+        omega = given["omega"]
+        if not isinstance(omega, (list, tuple)) or len(omega) != 3:
+            _fail("[initial].omega", "a list of 3 finite numbers [w1, w2, w3] (rad/s)", omega)
+        state: dict[str, Any] = {"omega": tuple(_number(f"[initial].omega[{i}]", w) for i, w in enumerate(omega))}
+        state.update({k: _number(_at("initial", k), given.get(k, 0.0)) for k in _FREE_TOP_ANGLES})
+        return state
+    _check_keys(given, "initial", names, (), f"initial value for system {system!r}")
+    return {}
+
+
+def _quantities(system: str, value: Any) -> tuple[str, ...]:
+    allowed = QUANTITIES[system]
+    if not isinstance(value, (list, tuple)) or not value:
+        _fail("[output].quantities", f"a non-empty list of quantity names (for {system}: {_one_of(allowed)})",
+              value)
+    seen: set[str] = set()
+    for i, q in enumerate(value):
+        where = f"[output].quantities[{i}]"
+        if not isinstance(q, str):
+            _fail(where, "a quantity name (a string)", q)
+        if q not in allowed:
+            raise InvalidInputError(f"scene key {where}: unknown quantity {_show(q)} for system {system!r}; "
+                                    f"expected one of {_one_of(allowed)}")
+        if q in seen:
+            raise InvalidInputError(f"scene key {where}: duplicate quantity {q!r}; each may appear once")
+        seen.add(q)
+    return tuple(value)
+
+
+def _name(value: Any) -> str | None:
+    if value is None:
+        return None
+    if not isinstance(value, str) or not 1 <= len(value) <= MAX_NAME_LENGTH or not value.isprintable():
+        _fail("name", f"a printable string of 1 to {MAX_NAME_LENGTH} characters", value)
+    return value
+
+
+# ----------------------------------------------------------------------------- the scene
+
+@dataclass(frozen=True)
+class Scene:
+    """One checked scene.  Constructing it validates and normalises every field.
+
+    Numbers become floats (``samples`` stays an int), ``quantities`` a tuple, a
+    free top's ``initial`` holds ``omega`` as a 3-tuple and ``phi theta psi``
+    (default 0).  Invalid fields raise :class:`~mechderive.errors.InvalidInputError`.
+    """
+
+    system: str
+    method: str
+    rtol: float
+    parameters: dict
+    initial: dict
+    t_end: float
+    samples: int
+    quantities: tuple
+    name: str | None = None
+
+    def __post_init__(self) -> None:
+        set_ = object.__setattr__
+        set_(self, "name", _name(self.name))
+        system = _choice("system", self.system, SYSTEMS)
+        set_(self, "method", _choice("method", self.method, METHODS))
+        lo, hi = RTOL_RANGE
+        set_(self, "rtol", _number("rtol", self.rtol, expected=f"a number in [{lo:g}, {hi:g}]",
+                                   valid=lambda x: lo <= x <= hi))
+        set_(self, "parameters", _parameters(system, self.parameters))
+        set_(self, "initial", _initial(system, self.initial))
+        set_(self, "t_end", _number("[time].t_end", self.t_end, expected="a finite number > 0",
+                                    valid=lambda x: x > 0))
+        if (isinstance(self.samples, bool) or not isinstance(self.samples, (int, np.integer))
+                or not 2 <= self.samples <= MAX_SAMPLES):
+            _fail("[time].samples", f"an integer in [2, {MAX_SAMPLES}]", self.samples)
+        set_(self, "samples", int(self.samples))
+        set_(self, "quantities", _quantities(system, self.quantities))
+
+    def times(self) -> np.ndarray:
+        """The sample times: ``samples`` equally spaced on [0, t_end], both ends included."""
+        return np.linspace(0.0, self.t_end, self.samples)
+
+
+def parse_scene(mapping: Mapping[str, Any], *, name: str | None = None) -> Scene:
+    """Check a parsed TOML document (a mapping) and return its :class:`Scene`.
+
+    ``name`` overrides the document's optional ``name`` key.
+
+    >>> parse_scene({"system": "falling_cat", "time": {"t_end": 1, "samples": 2},
+    ...              "output": {"quantities": ["flip_angle"]}}).initial
+    {}
+    >>> parse_scene({"system": "heavy_top", "colour": "red"})
+    Traceback (most recent call last):
+    ...
+    mechderive.errors.InvalidInputError: scene key colour: unknown key; expected top-level keys name, system, \
+method, rtol and tables [parameters], [initial], [time], [output]
+    """
+    if not isinstance(mapping, Mapping):
+        raise InvalidInputError(f"scene: expected a table of keys (a mapping), got {_show(mapping)}")
+    tables = ", ".join(f"[{t}]" for t in TABLES)
+    for key, value in mapping.items():
+        if key in TABLES:
+            _as_table(f"[{key}]", value)
+        elif key not in TOP_LEVEL_KEYS:
+            if isinstance(value, Mapping):
+                raise InvalidInputError(f"scene table [{_key_name(key)}]: unknown table; expected one of {tables}")
+            raise InvalidInputError(f"scene key {_key_name(key)}: unknown key; expected top-level keys "
+                                    f"{_one_of(TOP_LEVEL_KEYS)} and tables {tables}")
+    if "system" not in mapping:
+        raise InvalidInputError("scene key system: missing; expected one of "
+                                + ", ".join(repr(s) for s in SYSTEMS))
+    system = _choice("system", mapping["system"], SYSTEMS)
+    needed = [t for t in ("time", "output") if t not in mapping]
+    if system != "falling_cat":
+        needed = [t for t in ("parameters", "initial") if t not in mapping] + needed
+    if needed:
+        raise InvalidInputError(f"scene table [{needed[0]}]: missing; system {system!r} needs tables "
+                                + (", ".join(f"[{t}]" for t in TABLES) if system != "falling_cat"
+                                   else "[time], [output]"))
+    time, output = mapping["time"], mapping["output"]
+    _check_keys(time, "time", TIME_KEYS, TIME_KEYS, "key")
+    _check_keys(output, "output", OUTPUT_KEYS, OUTPUT_KEYS, "key")
+    return Scene(system=system, method=mapping.get("method", DEFAULT_METHOD), rtol=mapping.get("rtol", DEFAULT_RTOL),
+                 parameters=mapping.get("parameters", {}), initial=mapping.get("initial", {}),
+                 t_end=time["t_end"], samples=time["samples"], quantities=output["quantities"],
+                 name=name if name is not None else mapping.get("name"))
+
+
+def load_scene(path_or_text: os.PathLike | str, *, name: str | None = None) -> Scene:
+    """Read a scene from a file (a :class:`pathlib.Path`) or from TOML text (a ``str``).
+
+    A file's scene is named after the file's stem unless it has a ``name`` key or
+    ``name`` is given.  TOML syntax errors become
+    :class:`~mechderive.errors.InvalidInputError` with the line and column.
+
+    >>> load_scene('system = "heavy_top"\\nsamples = 5')
+    Traceback (most recent call last):
+    ...
+    mechderive.errors.InvalidInputError: scene key samples: unknown key; expected top-level keys name, system, \
+method, rtol and tables [parameters], [initial], [time], [output]
+    """
+    default_name = None
+    if isinstance(path_or_text, os.PathLike):
+        path = Path(path_or_text)
+        source = f"file {str(path)!r}"
+        try:
+            if path.stat().st_size > MAX_SCENE_BYTES:
+                raise InvalidInputError(f"scene {source}: expected at most {MAX_SCENE_BYTES} bytes, "
+                                        f"got {path.stat().st_size}")
+            text = path.read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError) as exc:
+            raise InvalidInputError(f"scene {source}: cannot read it: {exc}") from exc
+        default_name = path.stem
+    elif isinstance(path_or_text, str):
+        text, source = path_or_text, "text"
+        if "\n" not in text and "=" not in text and text.strip().endswith(".toml"):
+            raise InvalidInputError(f"scene text: expected TOML, got {_show(text)}, which looks like a file "
+                                    f"name; pass pathlib.Path({text.strip()!r}) to read the file")
+        if len(text) > MAX_SCENE_BYTES:
+            raise InvalidInputError(f"scene text: expected at most {MAX_SCENE_BYTES} characters, got {len(text)}")
+    else:
+        raise InvalidInputError(f"scene: expected a pathlib.Path or TOML text (a str), got {_show(path_or_text)}")
+    try:
+        document = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InvalidInputError(f"scene {source}: not valid TOML: {exc}") from exc
+    except RecursionError as exc:
+        raise InvalidInputError(f"scene {source}: not valid TOML: arrays or tables nested too deeply") from exc
+    if name is None and "name" not in document:
+        name = default_name
+    return parse_scene(document, name=name)
+
+
+# ----------------------------------------------------------------------------- writing
+
+def _toml_string(s: str) -> str:
+    out = []
+    for ch in s:
+        if ch in '"\\':
+            out.append("\\" + ch)
+        elif ord(ch) < 0x20 or ord(ch) == 0x7F:
+            out.append(f"\\u{ord(ch):04X}")
+        else:
+            out.append(ch)
+    return '"' + "".join(out) + '"'
+
+
+def _toml_value(v: Any) -> str:
+    if isinstance(v, str):
+        return _toml_string(v)
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+    if isinstance(v, int):
+        return str(v)
+    return repr(float(v))  # shortest round-trip repr; finite by construction, so valid TOML
+
+
+def scene_to_toml(scene: Scene) -> str:
+    """The scene as TOML text; :func:`load_scene` of it gives back an equal scene.
+
+    >>> print(scene_to_toml(load_scene('''system = "falling_cat"
+    ... [time]
+    ... t_end = 1
+    ... samples = 201
+    ... [output]
+    ... quantities = ["flip_angle"]''')), end="")
+    system = "falling_cat"
+    method = "auto"
+    rtol = 1e-09
+    <BLANKLINE>
+    [time]
+    t_end = 1.0
+    samples = 201
+    <BLANKLINE>
+    [output]
+    quantities = ["flip_angle"]
+    """
+    lines = [f"name = {_toml_string(scene.name)}"] if scene.name is not None else []
+    lines += [f"system = {_toml_string(scene.system)}", f"method = {_toml_string(scene.method)}",
+              f"rtol = {_toml_value(scene.rtol)}"]
+    for table, content in (("parameters", scene.parameters), ("initial", scene.initial),
+                           ("time", {"t_end": scene.t_end, "samples": scene.samples}),
+                           ("output", {"quantities": scene.quantities})):
+        if content:
+            lines += ["", f"[{table}]"] + [f"{k} = {_toml_value(v)}" for k, v in content.items()]
+    return "\n".join(lines) + "\n"
+
+
+# ----------------------------------------------------------------------------- registration hooks
+
+def _check_new_names(system: str, names: Iterable[str], what: str) -> tuple[str, ...]:
+    if system not in SYSTEMS:
+        raise InvalidInputError(f"expected a system, one of {_one_of(SYSTEMS)}, got {_show(system)}")
+    if isinstance(names, str):
+        raise InvalidInputError(f"expected a sequence of {what} names, got the single string {names!r}")
+    names = tuple(names)
+    for n in names:
+        if not isinstance(n, str) or not _NAME_PATTERN.fullmatch(n):
+            raise InvalidInputError(f"expected {what} names matching [A-Za-z_][A-Za-z0-9_]*, got {_show(n)}")
+    return names
+
+
+def register_system_parameters(system: str, names: Iterable[str]) -> None:
+    """Allow more (optional) [parameters] names for ``system``; only falling_cat's set is open.
+
+    Registering a name twice is harmless, so a module may register at import.
+    """
+    names = _check_new_names(system, names, "parameter")
+    if system not in _OPEN_PARAMETERS:
+        raise InvalidInputError(f"expected a system whose parameters are open ({_one_of(_OPEN_PARAMETERS)}), "
+                                f"got {system!r}, whose parameters are fixed: {_one_of(SYSTEM_PARAMETERS[system])}")
+    current = SYSTEM_PARAMETERS[system]
+    SYSTEM_PARAMETERS[system] = current + tuple(n for n in dict.fromkeys(names) if n not in current)
+
+
+def register_system_quantities(system: str, names: Iterable[str]) -> None:
+    """Allow more [output] quantity names for ``system`` (e.g. the falling cat's ``shape_*``).
+
+    Registering a name twice is harmless, so a module may register at import.
+    """
+    names = _check_new_names(system, names, "quantity")
+    current = QUANTITIES[system]
+    QUANTITIES[system] = current + tuple(n for n in dict.fromkeys(names) if n not in current)
