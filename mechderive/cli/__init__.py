@@ -1,4 +1,4 @@
-"""The ``mechderive`` command line: ``mechderive verify`` (more subcommands follow)."""
+"""The ``mechderive`` command line: ``run``, ``scenes``, ``verify``, ``derive``, ``check``, ``bench``, ``stress``."""
 
 from __future__ import annotations
 
@@ -20,9 +20,15 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"mechderive {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
 
-    from . import verify
+    # Each subcommand module registers itself; imported here, not at package import, so that
+    # `import mechderive.cli` stays light.
+    from . import bench, check, derive, run, verify
 
+    run.add_parsers(sub)  # run, scenes
     verify.add_parser(sub)
+    derive.add_parser(sub)
+    check.add_parser(sub)
+    bench.add_parser(sub)
     return parser
 
 

@@ -1,0 +1,137 @@
+"""``mechderive run`` and ``mechderive scenes``: solve a scene file, list and print the built-in ones."""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import sys
+import time
+from pathlib import Path
+
+from ..errors import InvalidInputError
+
+
+def add_parsers(sub: "argparse._SubParsersAction") -> None:
+    p = sub.add_parser(
+        "run",
+        help="solve a scene: derive, compile and evaluate only what it asks for",
+        description="Solve a scene (a TOML file, or the name of a built-in scene; the default scene when "
+        "omitted) and write the requested quantities.  Without -o, prints a summary.",
+    )
+    p.add_argument("scene", nargs="?", default=None, help="scene file (.toml) or built-in name (see `mechderive scenes`)")
+    p.add_argument("-o", "--output", metavar="OUT", help="write the table to OUT.csv or OUT.npz")
+    p.add_argument("--json", action="store_true", help="print the run's report as JSON")
+    p.add_argument("--plot", metavar="PNG", help="draw the motion to PNG (needs the `plot` extra: matplotlib)")
+    p.add_argument("--no-cache", action="store_true", help="do not read or write the disk cache of compiled code")
+    p.set_defaults(run=run)
+
+    s = sub.add_parser("scenes", help="list the built-in scenes, or print one as TOML",
+                       description="Without NAME, list the built-in scenes; with NAME, print it as TOML to start from.")
+    s.add_argument("name", nargs="?", default=None)
+    s.set_defaults(run=scenes)
+
+
+def _load(spec: str | None):
+    from ..scenes.builtin import list_scenes, load_builtin
+    from ..scenes.schema import load_scene
+
+    if spec is None:
+        return load_builtin("default")
+    path = Path(spec)
+    if path.suffix == ".toml" or path.exists():
+        if not path.exists():
+            raise InvalidInputError(f"scene file {spec!r}: expected an existing file, got no such file")
+        return load_scene(path)
+    names = [n for n, _ in list_scenes()]
+    if spec in names:
+        return load_builtin(spec)
+    raise InvalidInputError(f"scene {spec!r}: expected a .toml file or a built-in scene ({', '.join(names)})")
+
+
+_PLOT_NEEDS = {"heavy_top": ("theta", "apex_x", "apex_y", "apex_z"), "free_top": ("omega1", "omega2", "omega3"),
+               "falling_cat": ("flip_angle",)}
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..core import codecache
+    from ..scenes.planner import run_scene
+    from ..scenes.progress import Progress
+
+    if args.no_cache:
+        codecache.set_disk_cache(False)
+    start = time.perf_counter()
+    scene = _load(args.scene)
+    parse_s = time.perf_counter() - start
+    solve_scene = scene
+    if args.plot:
+        extra = tuple(q for q in _PLOT_NEEDS[scene.system] if q not in scene.quantities)
+        solve_scene = dataclasses.replace(scene, quantities=scene.quantities + extra)
+    with Progress(3, label=f"{scene.name or 'scene'}") as bar:
+        bar.update(1)
+        result = run_scene(solve_scene)
+        bar.update(1)
+        write_start = time.perf_counter()
+        columns = {q: result.columns[q] for q in scene.quantities}
+        if args.output:
+            from ..scenes.output import write_table
+
+            write_table(args.output, result.t, columns)
+        if args.plot:
+            from ..scenes.plot import plot_scene
+
+            extra = {"title": f"{scene.name or scene.system}"}
+            if scene.system == "free_top":
+                extra["moments"] = (scene.parameters["I1"], scene.parameters["I2"], scene.parameters["I3"])
+            plot_scene(scene.system, {"t": result.t, **result.columns}, args.plot, extra=extra)
+        bar.update(1)
+    report = dict(result.report)
+    report["timings"] = {"parse": round(parse_s, 6), **report["timings"],
+                         "write": round(time.perf_counter() - write_start, 6),
+                         "total": round(time.perf_counter() - start, 6)}
+    if args.json:
+        from ..scenes.output import report_json
+
+        print(report_json(report))
+    else:
+        _summary(scene, result, report, args)
+    return 0
+
+
+def _summary(scene, result, report, args) -> None:
+    t = result.t
+    print(f"scene {scene.name or '(file)'}: {scene.system}, {scene.samples} samples on [0, {scene.t_end:g}] s, "
+          f"method {report['method']}")
+    for k, v in report.get("details", {}).items():
+        if isinstance(v, (int, float, str)) and k != "evaluated":
+            print(f"  {k}: {v:.10g}" if isinstance(v, float) else f"  {k}: {v}")
+    est = report["error_estimate"]
+    print(f"  error estimate: {est:.2g}" if isinstance(est, float) else "  error estimate: not available")
+    print("  drift of conserved quantities: " + ", ".join(f"{k} {v:.2g}" for k, v in report["drift"].items()))
+    if report.get("note"):
+        print(f"  note: {report['note']}")
+    timing = report["timings"]
+    print("  seconds: " + ", ".join(f"{k} {v:.3f}" for k, v in timing.items()))
+    print(f"  derived {len(report['derived'])} quantities, compiled {len(report['compiled'])} functions "
+          "(0 and 0 when the disk cache is warm)")
+    names = list(scene.quantities)
+    width = max(12, *(len(n) + 1 for n in names))
+    print("\n" + "t".rjust(10) + "".join(n.rjust(width + 6) for n in names))
+    rows = range(len(t)) if len(t) <= 8 else [0, 1, 2, len(t) // 2, len(t) - 3, len(t) - 2, len(t) - 1]
+    for i in rows:
+        print(f"{t[i]:10.4f}" + "".join(f"{result.columns[n][i]:{width + 6}.12g}" for n in names))
+    if args.output:
+        print(f"\nwrote {args.output}")
+    if args.plot:
+        print(f"drew {args.plot}")
+
+
+def scenes(args: argparse.Namespace) -> int:
+    from ..scenes.builtin import list_scenes, scene_text
+
+    if args.name is None:
+        for name, description in list_scenes():
+            print(f"{name:<26} {description}")
+        return 0
+    sys.stdout.write(scene_text(args.name))
+    return 0
