@@ -156,7 +156,7 @@ def test_quantity_lists_are_as_specified():
                                        "p_phi", "p_psi", "omega1", "omega2", "omega3", *r,
                                        "apex_x", "apex_y", "apex_z")
     assert QUANTITIES["falling_cat"][:13] == (*r, "q0", "q1", "q2", "q3")
-    assert QUANTITIES["falling_cat"][13:] == ("flip_angle", "L1", "L2", "L3")
+    assert QUANTITIES["falling_cat"][13:] == ("flip_angle", "L1", "L2", "L3", "shape_bend", "shape_swivel")
 
 
 def test_scene_constructor_validates():
@@ -295,7 +295,8 @@ def test_unknown_key_with_odd_characters_is_shown_escaped():
     (free(initial=None), InvalidInputError, r"scene table \[initial\]: missing; system 'free_top' needs"),
     ({"system": "falling_cat", "parameters": {"k": 1}, "time": {"t_end": 1, "samples": 2},
       "output": {"quantities": ["L1"]}}, InvalidInputError,
-     r"scene key \[parameters\]\.k: unknown parameter for system 'falling_cat'; it takes none"),
+     r"scene key \[parameters\]\.k: unknown parameter for system 'falling_cat'; expected one of half_mass, "
+     r"joint_offset, radius, half_length, peak_bend"),
     ({"system": "falling_cat", "initial": {"shape": 1}, "time": {"t_end": 1, "samples": 2},
       "output": {"quantities": ["L1"]}}, InvalidInputError,
      r"scene key \[initial\]\.shape: unknown initial value for system 'falling_cat'; it takes none"),
@@ -429,8 +430,8 @@ def test_register_falling_cat_parameters_and_quantities(monkeypatch):
     schema.register_system_parameters("falling_cat", ["twist", "bend"])
     schema.register_system_parameters("falling_cat", ["twist"])  # twice: harmless
     schema.register_system_quantities("falling_cat", ("shape_twist", "shape_bend"))
-    assert schema.SYSTEM_PARAMETERS["falling_cat"] == ("twist", "bend")
-    assert QUANTITIES["falling_cat"][-2:] == ("shape_twist", "shape_bend")
+    assert schema.SYSTEM_PARAMETERS["falling_cat"][-2:] == ("twist", "bend")
+    assert QUANTITIES["falling_cat"][-2:] == ("shape_swivel", "shape_twist")  # shape_bend was already known
     scene = parse_scene({"system": "falling_cat", "parameters": {"twist": 0.5},
                          "time": {"t_end": 1, "samples": 3}, "output": {"quantities": ["shape_bend"]}})
     assert scene.parameters == {"twist": 0.5}

@@ -104,11 +104,12 @@ QUANTITIES: dict[str, tuple[str, ...]] = {
                  "phi", "theta", "psi", "q0", "q1", "q2", "q3"),
     "heavy_top": ("theta", "phi", "psi", "theta_dot", "phi_dot", "psi_dot", "u", "energy", "p_phi", "p_psi",
                   "omega1", "omega2", "omega3", *_R, "apex_x", "apex_y", "apex_z"),
-    "falling_cat": (*_R, "q0", "q1", "q2", "q3", "flip_angle", "L1", "L2", "L3"),
+    "falling_cat": (*_R, "q0", "q1", "q2", "q3", "flip_angle", "L1", "L2", "L3", "shape_bend", "shape_swivel"),
 }
 
 #: Parameters of the falling cat; a placeholder until the cat module registers its names.
-FALLING_CAT_PARAMETERS: tuple[str, ...] = ()
+#: The falling cat's parameters (mechderive.systems.deformable.cat.check_cat_parameters validates them).
+FALLING_CAT_PARAMETERS: tuple[str, ...] = ("half_mass", "joint_offset", "radius", "half_length", "peak_bend")
 
 #: The [parameters] names per system.  heavy_top and free_top need all of theirs;
 #: falling_cat's are optional and open to :func:`register_system_parameters`.
