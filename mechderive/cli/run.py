@@ -112,14 +112,15 @@ def _summary(scene, result, report, args) -> None:
         print(f"  note: {report['note']}")
     timing = report["timings"]
     print("  seconds: " + ", ".join(f"{k} {v:.3f}" for k, v in timing.items()))
-    print(f"  derived {len(report['derived'])} quantities, compiled {len(report['compiled'])} functions "
-          "(0 and 0 when the disk cache is warm)")
+    fresh = sum(not c.endswith("(disk)") for c in report["compiled"])
+    print(f"  derived {len(report['derived'])} quantities, compiled {fresh} functions, "
+          f"{len(report['compiled']) - fresh} loaded from the disk cache")
     names = list(scene.quantities)
     width = max(12, *(len(n) + 1 for n in names))
-    print("\n" + "t".rjust(10) + "".join(n.rjust(width + 6) for n in names))
+    print("\n" + "t".rjust(10) + "".join(" " + n.rjust(width + 6) for n in names))
     rows = range(len(t)) if len(t) <= 8 else [0, 1, 2, len(t) // 2, len(t) - 3, len(t) - 2, len(t) - 1]
     for i in rows:
-        print(f"{t[i]:10.4f}" + "".join(f"{result.columns[n][i]:{width + 6}.12g}" for n in names))
+        print(f"{t[i]:10.4f}" + "".join(f" {result.columns[n][i]:{width + 6}.12g}" for n in names))
     if args.output:
         print(f"\nwrote {args.output}")
     if args.plot:
