@@ -50,6 +50,7 @@ import numpy as np
 
 from ...core.codecache import cached_lambdify
 from ...core.phase import DD, mod_two_pi, reduce_phase
+from ...special.highprec import complete_pi_mp
 from ...core.validate import as_finite_array, check_rotation_matrix
 from ...errors import DerivationError, InvalidInputError
 from ...inertia.validate import check_principal_moments
@@ -431,7 +432,7 @@ def _setup(I: np.ndarray, w0: np.ndarray, R0: np.ndarray) -> FreeTopSolution:
         kind="separatrix" if separatrix else "elliptic", m=float(m), m1=float(m1), polhode_period=T,
         _perm=perm, _amp=(float(P), float(Q), float(S)), _lam=DD.of(lam), _u0=DD.of(u0), _period=period,
         _I_rel=(float(Ix), float(Iy), float(Iz)),
-        _mp=dict(args=args, m=m, lam=lam, u0=u0, A0=A0), **common)
+        _mp=dict(args=args, m=m, m1=m1, lam=lam, u0=u0, A0=A0), **common)
 
 
 def _orientation_setup(sol: FreeTopSolution) -> _Orientation:
@@ -451,7 +452,7 @@ def _orientation_setup(sol: FreeTopSolution) -> _Orientation:
         arctan_u0 = float(mpmath.atan(mpmath.sqrt(-n) * mpmath.tanh(u0)))
     else:
         K = mpmath.ellipk(m)
-        dphi = DD.of(c1 * 4 * K / lam + c2 / lam * 4 * mpmath.ellippi(n, m))
+        dphi = DD.of(c1 * 4 * K / lam + c2 / lam * 4 * complete_pi_mp(n, v["m1"]))
     # The L frame and φ'0: L in space components is R0ᵀ L_body.
     L_body = np.array(sol.moments) * np.array(sol.omega0)
     S_frame = _l_frame(sol.R0.T @ L_body)

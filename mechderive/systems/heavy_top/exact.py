@@ -47,6 +47,7 @@ from ...errors import DerivationError, InvalidInputError
 from ...core.codecache import cached_lambdify
 from ...kinematics.rotations import angular_velocity_body, rotation_matrix
 from ...core.phase import DD, mod_two_pi, reduce_phase
+from ...special.highprec import complete_pi_mp
 from .parameters import check_initial, check_params
 
 __all__ = ["HeavyTopSolution", "exact_heavy_top"]
@@ -498,7 +499,7 @@ def _setup(params: dict, init: dict) -> HeavyTopSolution:
         motion_class=classify(float(u_1), float(u_2), float(a), float(b)),
         _kappa=DD.of(kappa), _v0=DD.of(v0), _period=period, _u1=float(u_1), _amp=float(amp),
         _one_minus_u2=float(1 - u_2), _one_plus_u1=float(1 + u_1), _theta_const=float(th0),
-        _mp=dict(steady=False, I1=I1, I3=I3, a=a, b=b, roots=roots, kappa=kappa, m=m, A0=A0, K=K,
+        _mp=dict(steady=False, I1=I1, I3=I3, a=a, b=b, roots=roots, kappa=kappa, m=m, m1=m1, A0=A0, K=K,
                  scale=scale), **common)
 
 
@@ -549,7 +550,7 @@ def _precise_advance(sol: HeavyTopSolution) -> dict[str, DD]:
             if abs(c) <= v["scale"] * (abs(v["a"]) + abs(v["b"]) + 1):
                 continue
             if n not in complete:
-                complete[n] = mpmath.ellippi(n, m)
+                complete[n] = complete_pi_mp(n, v["m1"])
             per += (c / kappa) * 2 * complete[n]
         out[name] = DD.of(per)
     return out
