@@ -22,13 +22,14 @@ def build_parser() -> argparse.ArgumentParser:
 
     # Each subcommand module registers itself; imported here, not at package import, so that
     # `import mechderive.cli` stays light.
-    from . import bench, check, derive, run, verify
+    from . import bench, check, derive, run, stress, verify
 
     run.add_parsers(sub)  # run, scenes
     verify.add_parser(sub)
     derive.add_parser(sub)
     check.add_parser(sub)
     bench.add_parser(sub)
+    stress.add_parser(sub)
     return parser
 
 
