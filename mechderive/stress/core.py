@@ -268,7 +268,7 @@ def format_row(r: CaseResult) -> str:
     """One fixed-width line: case, worst error against the reference and its tolerance, drift, NaN, verdict."""
     err = "—" if not r.max_error_what else (f"{r.max_error:.1e}" if math.isfinite(r.max_error) else "NaN")
     tol = "—" if not r.max_error_what else f"{r.max_error_tol:.0e}"
-    detail = r.reason if r.verdict != "met" else f"worst: {r.max_error_what}; {r.reason}"
+    detail = r.reason if r.verdict != "met" or not r.max_error_what else f"worst: {r.max_error_what}; {r.reason}"
     if r.details.get("summary"):
         detail = "[" + ", ".join(r.details["summary"]) + "] " + detail
     cells = (r.name, err, tol, "—" if r.drift is None else f"{r.drift:.1e}", "no" if r.nan_free else "YES",

@@ -83,7 +83,7 @@ def _separatrix(one_minus_m: float | None, quick: bool = False, integrators: boo
             if one_minus_m is not None:
                 col.compare("closed form", "1 - m (relative)", sol.m1, abs(float(m1)), 1e-12, scale=abs(float(m1)))
         if integrators:
-            free_integrators(col, SEP_MOMENTS, w0, np.array(_R0), t, ref, step=0.005, tol=_SEP_INT_TOL)
+            free_integrators(col, SEP_MOMENTS, w0, np.array(_R0), t, ref, step=0.01, tol=_SEP_INT_TOL)
 
     return Case(name=name, family="1 free-top separatrix", description=what, system="free_top",
                 inputs=f"I = {SEP_MOMENTS}, ω0 = ({w0[0]:g}, {w0[1]:g}, {w0[2]:.17g}), R0 = R(0.3, 0.7, -1.1)",

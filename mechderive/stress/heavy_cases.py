@@ -135,7 +135,7 @@ def _pole(name: str, init: dict, description: str, quick: bool = False):
     near_top = init["theta"] < 1.0
 
     def run(col: Collector) -> None:
-        t = np.linspace(0.0, 10.0, 201)  # 4 to 7 nutation periods: several passages near the pole
+        t = np.linspace(0.0, 6.0, 121)  # 2 to 4 nutation periods: several passages near the pole
         ref = heavy_reference(TOP, init, t)
         heavy_closed_form(col, TOP, init, t, ref, angles="sum" if near_top else "difference")
         heavy_integrators(col, TOP, init, t, ref, step=0.005)
