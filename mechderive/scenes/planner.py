@@ -156,7 +156,15 @@ def _heavy_integrate(scene: Scene, t: np.ndarray) -> tuple[dict, dict, Any]:
     if any(k in need for k in ("theta_dot", "phi_dot", "psi_dot")):
         rates = euler_rates(theta, psi, *traj.omega.T)  # singular where sin θ = 0: inf/nan reported there
         values.update(phi_dot=rates[:, 0], theta_dot=rates[:, 1], psi_dot=rates[:, 2])
-    cols = _heavy_columns(scene.quantities, values, scene.parameters)
+    # E, p_φ, p_ψ from ω and R (the integrator's own invariants), not through the Euler rates,
+    # which are singular at θ = 0.
+    inv = np.asarray(traj.invariants, dtype=float)
+    cols = _heavy_columns(tuple(q for q in scene.quantities if q not in ("energy", "p_phi", "p_psi")), values,
+                          scene.parameters)
+    for k, name in enumerate(("energy", "p_phi", "p_psi")):
+        if name in scene.quantities:
+            cols[name] = inv[:, k]
+    cols = {q: cols[q] for q in scene.quantities}
     est = traj.angle_error_estimate
     info = {"error_estimate": None if est is None else float(est),
             "error_estimate_kind": traj.error_estimate_kind,
@@ -319,6 +327,15 @@ def run_scene(scene: Scene) -> RunResult:
     derive_s = derivation_seconds() - seconds0
     compile_s = sum(s for _, how, s in compiled)
     total = time.perf_counter() - start
+    estimate = info.get("error_estimate")
+    if method == "integrate":
+        # The integrators' estimates are absolute (angles in rad, R entries): compared with rtol as is,
+        # since a relative error of a growing angle would mean nothing.
+        if estimate is None:
+            note = (note + "; " if note else "") + "no error estimate: rtol not verified"
+        elif estimate > scene.rtol:
+            note = (note + "; " if note else "") + (f"error estimate {estimate:.2g} exceeds the requested rtol "
+                                                    f"{scene.rtol:g}: not met")
     for k, v in list(cols.items()):
         if not np.all(np.isfinite(v)):
             bad = int(np.sum(~np.isfinite(v)))

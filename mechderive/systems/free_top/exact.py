@@ -241,7 +241,7 @@ class FreeTopSolution:
         With ``continuous=False`` φ' and ψ' are reduced modulo 2π exactly (for R);
         otherwise they are unwrapped in time (plain floats).
         """
-        from ...special.integrals import elliptic_pi_incomplete
+        from ...special.integrals import pi_of_am
 
         j, r, sn, cn, dn, jacobi_am = self._elliptic(t)
         P, Q, S = self._amp
@@ -262,7 +262,9 @@ class FreeTopSolution:
             k = np.sqrt(-o.n)
             bounded = o.c2_over_lam * k / (1 - o.n) * (np.arctan(k * np.tanh(r)) - o.arctan_u0)
             return o.phi0 + mod_two_pi(o.rate_inf, t) + bounded, theta, psi_red
-        pi_r = np.asarray(elliptic_pi_incomplete(o.n, A, self.m, m1=self.m1))
+        # Π(n; am r | m) straight from r (sn, cn, dn of r): through the rounded am(r) the error would
+        # be amplified by 1/((1 - n sin²A) dn) ~ 1/√(1 - m) at the saddle passages near the separatrix.
+        pi_r = np.asarray(pi_of_am(o.n, r, self.m, m1=self.m1))
         phi_red = o.phi0 + o.c1_over_lam * (r - self._u0.hi - self._u0.lo) + o.c2_over_lam * (pi_r - o.pi_u0)
         if continuous:
             return phi_red + j * (o.dphi.hi + o.dphi.lo), theta, psi_red - s * 2 * np.pi * j

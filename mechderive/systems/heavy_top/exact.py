@@ -47,6 +47,7 @@ from ...errors import DerivationError, InvalidInputError
 from ...core.codecache import cached_lambdify
 from ...kinematics.rotations import angular_velocity_body, rotation_matrix
 from ...core.phase import DD, mod_two_pi, reduce_phase
+from ...special._doubledouble import dd_add
 from ...special.highprec import complete_pi_mp
 from .parameters import check_initial, check_params
 
@@ -153,10 +154,69 @@ class _Pass:
         return self._get("am", lambda: np.asarray(jacobi_am(self.phase()[1], self.sol.m, m1=self.sol.m1)))
 
     def pi(self, n: float):
-        from ...special.integrals import elliptic_pi_incomplete
+        # Π(n; am r | m) straight from the phase r (sn, cn, dn of r): going through am(r) would
+        # amplify its rounding by 1/dn near the turning points when m → 1.
+        from ...special.integrals import pi_of_am
 
-        return self._get(f"pi({n!r})", lambda: np.asarray(
-            elliptic_pi_incomplete(n, self.amplitude(), self.sol.m, m1=self.sol.m1)))
+        n1 = self.sol._mp.get("one_minus_n", {}).get(n)
+        if n1 is not None and n1 < 1e-3 and self.sol._period is not None:
+            return self._get(f"pi({n!r})", lambda: self._pi_near_one(n, n1))
+        return self._get(f"pi({n!r})", lambda: np.asarray(pi_of_am(n, self.phase()[1], self.sol.m, m1=self.sol.m1)))
+
+    def _pi_near_one(self, n: float, n1: float) -> np.ndarray:
+        """Π(n; am r | m) for n close to 1 with 1 - n = ``n1`` known to full relative accuracy.
+
+        Near a pole passage 1 - n₊ = (1 - u2)/(1 - u1) is tiny; forming it as 1 - float(n) would
+        lose its digits (1e-16/(1 - n) relative).  DLMF 19.25.14 in Carlson's form with
+        1 - n sn² = cn² + (1 - n) sn², and Π(n; π - A) = 2Π(n) - Π(n; A) past r = K.
+        """
+        from ...special._carlson import elliprj
+
+        sn, cn, dn = self.jacobi()
+        r = self.phase()[1]
+        K = self.sol._period.hi / 2
+        sn3 = np.abs(sn) ** 3
+        with np.errstate(all="ignore"):
+            half = n / 3 * sn3 * elliprj(cn * cn, dn * dn, 1.0, cn * cn + n1 * sn * sn)
+            complete = K + n / 3 * float(elliprj(0.0, self.sol.m1, 1.0, n1))
+        return np.where(r <= K, r + half, 2 * complete - ((2 * K - r) + half))
+
+    def half_theta(self):
+        """(sin θ/2, cos θ/2) up to a common positive factor, *signed* through exact passages.
+
+        When the apex passes exactly through the pole (u2 = 1) or the bottom (u1 = -1),
+        √(1 - u) = √(u2 - u1)|cn| (resp. √(1 + u) = √(u2 - u1)|sn|); keeping the sign of cn (sn)
+        continues the motion through the passage (θ → -θ), instead of bouncing back.
+        """
+        def make():
+            sn, cn, _ = self.jacobi()
+            one_minus, one_plus = self.one_minus_plus_u()
+            s, c = np.sqrt(one_minus), np.sqrt(one_plus)
+            # sn, cn are of r = v - j·2K; sn(v) = (-1)^j sn(r), cn(v) = (-1)^j cn(r)
+            parity = 1.0 - 2.0 * np.mod(self.phase()[0], 2.0)
+            if self.sol._one_minus_u2 == 0.0:
+                s = self.sol._mp["pole_sign"] * np.sqrt(self.sol._amp) * cn * parity
+            if self.sol._one_plus_u1 == 0.0:
+                c = self.sol._mp["bottom_sign"] * np.sqrt(self.sol._amp) * sn * parity
+            return s, c
+        return self._get("half_theta", make)
+
+    def passages(self):
+        """Exact passages through the pole or the bottom since t = 0 (each turns φ and ψ by π for θ ≥ 0)."""
+        def make():
+            sol = self.sol
+            if sol._one_minus_u2 != 0.0 and sol._one_plus_u1 != 0.0:
+                return np.zeros(self.t.shape)
+            j, r = self.phase()
+            half = sol._period.hi / 2  # K: the pole at v = K (mod 2K), the bottom at v = 0 (mod 2K)
+            r0 = sol._mp["v0_reduced"]
+            count = np.zeros(self.t.shape)
+            if sol._one_minus_u2 == 0.0:
+                count = count + j + (r >= half) - (r0 >= half)
+            if sol._one_plus_u1 == 0.0:
+                count = count + j + (r > 0) - (r0 > 0)
+            return count
+        return self._get("passages", make)
 
     def one_minus_plus_u(self):
         def make():
@@ -181,6 +241,31 @@ class _Pass:
         if reduced:
             return value + mod_two_pi(per, j)
         return value + j * (per.hi + per.lo)
+
+    def half_angle(self, a: _Angle, b: _Angle, sign: int) -> np.ndarray:
+        """(a ± b)/2, reduced modulo 2π in double-double; terms with a common characteristic combined
+        first, so that a term cancelling in the sum (n₊ in φ + ψ, n₋ in φ - ψ) is never evaluated."""
+        sol = self.sol
+        j, r = self.phase()
+        coeffs: dict[float, float] = {}
+        pi0s: dict[float, float] = {}
+        for spec, w in ((a, 0.5), (b, 0.5 * sign)):
+            for c, n, pi0 in spec.terms:
+                coeffs[n] = coeffs.get(n, 0.0) + w * c
+                pi0s[n] = pi0
+        c0 = 0.5 * (a.c0_over_kappa + sign * b.c0_over_kappa)
+        value = 0.5 * (a.start + sign * b.start) + c0 * (r - sol._v0.hi - sol._v0.lo)
+        for n, c in coeffs.items():
+            if c != 0.0:
+                value = value + c * (self.pi(n) - pi0s[n])
+        if a.per_period is not None:
+            per_a, per_b = a.per_period, b.per_period
+            if j.size and np.max(np.abs(j)) > _FEW_PERIODS:
+                per_a, per_b = sol._per_period_precise[a.name], sol._per_period_precise[b.name]
+            hi, lo = dd_add(per_a.hi, per_a.lo, sign * per_b.hi, sign * per_b.lo)  # exact sum, then exact halving
+            per = DD(0.5 * float(hi), 0.5 * float(lo))
+            value = value + mod_two_pi(per, j)
+        return value
 
     def rate(self, spec: _Angle) -> np.ndarray:
         sol = self.sol
@@ -295,6 +380,9 @@ class HeavyTopSolution:
                 return np.full(t.shape, self._theta_const)
             one_minus, one_plus = ps.one_minus_plus_u()
             return 2 * np.arctan2(np.sqrt(one_minus), np.sqrt(one_plus))
+        if q == "_theta_signed":
+            s, c = ps.half_theta()
+            return 2 * np.arctan2(s, c)
         if q == "theta_dot":
             if steady:
                 return np.zeros(t.shape)
@@ -305,16 +393,18 @@ class HeavyTopSolution:
         if q in ("phi", "psi", "phi_wrapped", "psi_wrapped"):
             spec = self._angles[q[:3]]
             if q.endswith("wrapped"):
-                x = ps.angle(spec, reduced=True)
+                x = ps.angle(spec, reduced=True) + (np.pi * ps.passages() if not steady else 0.0)
                 return x - 2 * np.pi * np.round(x / (2 * np.pi))
-            return ps.angle(spec, reduced=False)
+            return ps.angle(spec, reduced=False) + (np.pi * ps.passages() if not steady else 0.0)
         if q in ("phi_dot", "psi_dot"):
             return ps.rate(self._angles[q[:3]])
         if q == "R":
-            return rotation_matrix(ps.angle(self._angles["phi"], reduced=True), self._quantity(ps, "theta"),
-                                   ps.angle(self._angles["psi"], reduced=True))
+            if steady:
+                return rotation_matrix(ps.angle(self._angles["phi"], reduced=True), self._theta_const,
+                                       ps.angle(self._angles["psi"], reduced=True))
+            return self._rotation(ps)
         if q == "apex":
-            th = self._quantity(ps, "theta")
+            th = self._quantity(ps, "theta" if steady else "_theta_signed")
             ph = ps.angle(self._angles["phi"], reduced=True)
             return np.stack([np.sin(th) * np.sin(ph), -np.sin(th) * np.cos(ph), np.cos(th)], axis=-1)
         if q == "omega":
@@ -322,6 +412,24 @@ class HeavyTopSolution:
                                          ps.angle(self._angles["psi"], reduced=True), self._quantity(ps, "phi_dot"),
                                          self._quantity(ps, "theta_dot"), self._quantity(ps, "psi_dot"))
         raise InvalidInputError(f"unknown quantity {q!r}: expected one of {', '.join(QUANTITIES)}")
+
+    def _rotation(self, ps: _Pass) -> np.ndarray:
+        """R from the quaternion of Rᵀ built on (φ + ψ)/2 and (φ - ψ)/2 (see conversions.euler_to_quaternion).
+
+        Near the pole φ and ψ are individually ill-conditioned but φ + ψ is not, and φ - ψ enters
+        multiplied by sin(θ/2) (near the bottom: the other way round); forming R from φ and ψ
+        separately would multiply their rounding by 1/(1 - n±).  The half sums and differences
+        are reduced mod 2π in double-double (their advances per period halved exactly).
+        """
+        from ...kinematics.conversions import quaternion_to_matrix
+
+        sigma = ps.half_angle(self._angles["phi"], self._angles["psi"], +1)
+        delta = ps.half_angle(self._angles["phi"], self._angles["psi"], -1)
+        s, c = ps.half_theta()
+        norm = np.hypot(s, c)
+        s, c = s / norm, c / norm
+        q = np.stack([c * np.cos(sigma), s * np.cos(delta), s * np.sin(delta), c * np.sin(sigma)], axis=-1)
+        return quaternion_to_matrix(q / np.linalg.norm(q, axis=-1, keepdims=True))
 
     # --- single quantities ------------------------------------------------------------------------
 
@@ -470,8 +578,9 @@ def _setup(params: dict, init: dict) -> HeavyTopSolution:
     common = dict(parameters=dict(params), initial=dict(init), energy=float(energy), p_phi=float(I1 * b),
                   p_psi=float(I1 * a), f_coefficients=tuple(float(c) for c in coeffs))
     u_1, u_2, u_3 = _real_roots(coeffs, known=u0 if S[1] == 0 else None)
-    # u0 lies in [u1, u2] up to the roots' own accuracy (40 digits); snap it in.
-    u_2, u_1 = max(u_2, u0), min(u_1, u0)
+    # u0 lies in [u1, u2] up to the roots' own accuracy (40 digits); snap it in, and keep the
+    # turning points in [-1, 1] (a root at ±1 can come out as ±(1 + 4e-40)).
+    u_2, u_1 = min(max(u_2, u0), mp(1)), max(min(u_1, u0), mp(-1))
     amp = u_2 - u_1
     scale = mp(10) ** (-_DPS + 8)
     roots_f = (float(u_1), float(u_2), float(u_3))
@@ -491,16 +600,46 @@ def _setup(params: dict, init: dict) -> HeavyTopSolution:
     v0 = mpmath.ellipf(A0, m)
     K = mpmath.ellipk(m) if m1 != 0 else mpmath.inf
     period = None if m1 == 0 else DD.of(2 * K)
-    n_plus = (u_2 - u_1) / (1 - u_1)
+    n_plus = (u_2 - u_1) / (1 - u_1) if u_1 < 1 else mp(0)
+    n_minus = -(u_2 - u_1) / (1 + u_1) if u_1 > -1 else -mpmath.inf
     return HeavyTopSolution(
         kind="nutating", roots=roots_f, m=float(m), m1=float(m1),
         nutation_period=float(2 * K / kappa) if period is not None else float("inf"),
-        conditioning=float(1 / (1 - n_plus)) if n_plus < 1 else float("inf"),
+        conditioning=float(max(1 / (1 - n_plus) if n_plus < 1 else mpmath.inf, 1 - n_minus)),
         motion_class=classify(float(u_1), float(u_2), float(a), float(b)),
         _kappa=DD.of(kappa), _v0=DD.of(v0), _period=period, _u1=float(u_1), _amp=float(amp),
         _one_minus_u2=float(1 - u_2), _one_plus_u1=float(1 + u_1), _theta_const=float(th0),
         _mp=dict(steady=False, I1=I1, I3=I3, a=a, b=b, roots=roots, kappa=kappa, m=m, m1=m1, A0=A0, K=K,
+                 v0_reduced=float(v0 - 2 * K * mpmath.floor(v0 / (2 * K))) if period is not None else float(v0),
+                 pole_sign=_passage_sign(mpmath.ellipfun("cn", v0, m=m), -mpmath.ellipfun("sn", v0, m=m), S[1]),
+                 bottom_sign=_passage_sign(mpmath.ellipfun("sn", v0, m=m), mpmath.ellipfun("cn", v0, m=m), -S[1]),
                  scale=scale), **common)
+
+
+def _passage_sign(value, slope, theta_dot) -> float:
+    """The sign making √(amp)·value (sin θ/2 at a pole passage, cos θ/2 at a bottom passage) start
+    with the sign of the initial state: positive where value ≠ 0; at a start on the pole/bottom
+    itself, the sign that makes θ move as θ̇0 says (value changes like ``slope``)."""
+    if value != 0 and abs(value) > mpmath.mpf(10) ** (-_DPS // 2):
+        return 1.0 if value > 0 else -1.0
+    if theta_dot == 0 or slope == 0:
+        return 1.0
+    return 1.0 if (slope > 0) == (theta_dot > 0) else -1.0
+
+
+def _fractions(f, args: tuple) -> list:
+    """The partial-fraction constants; at an exact pole or bottom passage (1 ∓ u = 0) the term
+    whose coefficient vanishes with b ∓ a comes out 0/0: it is returned as NaN and dropped."""
+    try:
+        return list(f(*args))
+    except ZeroDivisionError:
+        I1, I3, a, b, u1, u2, u3 = args
+        eps = mpmath.mpf(10) ** (-_DPS)
+        near = list(f(I1, I3, a, b, u1 + eps if u1 == -1 else u1, u2 - eps if u2 == 1 else u2, u3))
+        for k in range(1, len(near), 2):
+            if abs(near[k + 1]) > 1 / eps ** mpmath.mpf("0.5") or abs(near[k]) > 1 / eps ** mpmath.mpf("0.5"):
+                near[k], near[k + 1] = mpmath.nan, mpmath.nan
+        return near
 
 
 def _angle_setup(sol: HeavyTopSolution) -> dict[str, _Angle]:
@@ -516,18 +655,22 @@ def _angle_setup(sol: HeavyTopSolution) -> dict[str, _Angle]:
     v = sol._mp
     f = _angle_functions()
     frac_args = (v["I1"], v["I3"], v["a"], v["b"], *v["roots"])
-    kappa, A0 = v["kappa"], v["A0"]
+    kappa, A0, m = v["kappa"], v["A0"], v["m"]
     K = float(v["K"])
     out = {}
     for name in ("phi", "psi"):
-        flat = f[name](*frac_args)
+        flat = _fractions(f[name], frac_args)
         c0 = flat[0]
         terms, per = [], float(c0 / kappa) * 2 * K if sol._period is not None else None
         for c, n in zip(flat[1::2], flat[2::2]):
-            if abs(c) <= v["scale"] * (abs(v["a"]) + abs(v["b"]) + 1):
-                continue  # e.g. b = a when the apex passes through the pole: the n₊ term is absent
-            pi0 = float(elliptic_pi_incomplete(float(n), float(A0), sol.m, m1=sol.m1))
+            if not mpmath.isfinite(c) or not mpmath.isfinite(n) or abs(c) <= v["scale"] * (abs(v["a"]) + abs(v["b"]) + 1):
+                continue  # b = ±a: the apex passes through the pole (bottom), the n₊ (n₋) term is absent
+            if 1 - n < mpmath.mpf("1e-3"):
+                pi0 = float(mpmath.ellippi(n, A0, m))  # near the pole: 1 - n must keep its digits
+            else:
+                pi0 = float(elliptic_pi_incomplete(float(n), float(A0), sol.m, m1=sol.m1))
             terms.append((float(c / kappa), float(n), pi0))
+            sol._mp.setdefault("one_minus_n", {})[float(n)] = float(1 - n)  # exact at 40 digits
             if per is not None:
                 per += float(c / kappa) * 2 * float(elliptic_pi(float(n), sol.m, m1=sol.m1))
         out[name] = _Angle(name, float(sol.initial[name]), float(c0 / kappa), tuple(terms),
@@ -544,10 +687,10 @@ def _precise_advance(sol: HeavyTopSolution) -> dict[str, DD]:
     complete: dict = {}  # φ and ψ share their characteristics n±
     out = {}
     for name in ("phi", "psi"):
-        flat = f[name](*frac_args)
+        flat = _fractions(f[name], frac_args)
         per = (flat[0] / kappa) * 2 * K
         for c, n in zip(flat[1::2], flat[2::2]):
-            if abs(c) <= v["scale"] * (abs(v["a"]) + abs(v["b"]) + 1):
+            if not mpmath.isfinite(c) or not mpmath.isfinite(n) or abs(c) <= v["scale"] * (abs(v["a"]) + abs(v["b"]) + 1):
                 continue
             if n not in complete:
                 complete[n] = complete_pi_mp(n, v["m1"])
