@@ -408,10 +408,34 @@ class HeavyTopSolution:
             ph = ps.angle(self._angles["phi"], reduced=True)
             return np.stack([np.sin(th) * np.sin(ph), -np.sin(th) * np.cos(ph), np.cos(th)], axis=-1)
         if q == "omega":
-            return angular_velocity_body(ps.angle(self._angles["phi"], reduced=True), self._quantity(ps, "theta"),
+            if steady:
+                theta, theta_dot = self._quantity(ps, "theta"), np.zeros(t.shape)
+            else:
+                # the signed θ (continuous through exact passages) with φ, ψ without the π jumps
+                theta, theta_dot = self._quantity(ps, "_theta_signed"), self._signed_theta_dot(ps)
+            return angular_velocity_body(ps.angle(self._angles["phi"], reduced=True), theta,
                                          ps.angle(self._angles["psi"], reduced=True), self._quantity(ps, "phi_dot"),
-                                         self._quantity(ps, "theta_dot"), self._quantity(ps, "psi_dot"))
+                                         theta_dot, self._quantity(ps, "psi_dot"))
         raise InvalidInputError(f"unknown quantity {q!r}: expected one of {', '.join(QUANTITIES)}")
+
+    def _signed_theta_dot(self, ps: _Pass) -> np.ndarray:
+        """d/dt of the signed θ: -u̇/sin θ, and at exact passages the form that stays finite there.
+
+        Through the pole (u2 = 1): sin(θ/2) = ±√(amp/2) cn, so θ̇ = ∓κ√(2 amp) sn dn / cos(θ/2);
+        through the bottom (u1 = -1): cos(θ/2) = ±√(amp/2) sn, so θ̇ = ∓κ√(2 amp) cn dn / sin(θ/2) likewise.
+        """
+        sn, cn, dn = ps.jacobi()
+        theta = self._quantity(ps, "_theta_signed")
+        kappa = self._kappa.hi + self._kappa.lo
+        parity = 1.0 - 2.0 * np.mod(ps.phase()[0], 2.0)
+        k = kappa * np.sqrt(2 * self._amp) * parity
+        if self._one_minus_u2 == 0.0:
+            return -self._mp["pole_sign"] * k * sn * dn / np.cos(theta / 2)
+        if self._one_plus_u1 == 0.0:
+            return -self._mp["bottom_sign"] * k * cn * dn / np.sin(theta / 2)
+        u_dot = self._quantity(ps, "u_dot")
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return -u_dot / np.sin(theta)
 
     def _rotation(self, ps: _Pass) -> np.ndarray:
         """R from the quaternion of Rᵀ built on (φ + ψ)/2 and (φ - ψ)/2 (see conversions.euler_to_quaternion).
