@@ -19,7 +19,7 @@ from ..core.compile import wrap_vectorised
 from ..core.validate import as_finite_array, check_rotation_matrix
 
 __all__ = ["rotation_matrix", "angular_velocity_body", "angular_velocity_space", "euler_rates",
-           "euler_angles_from_matrix"]
+           "euler_angles_from_matrix", "continuous_euler_angles"]
 
 _RATES = ("phi", "theta", "psi", "phi_dot", "theta_dot", "psi_dot")
 
@@ -102,3 +102,34 @@ def euler_angles_from_matrix(R: Any) -> np.ndarray:
     phi = np.where(lock, np.arctan2(R[..., 0, 1], R[..., 0, 0]), np.arctan2(R[..., 2, 0], -R[..., 2, 1]))
     psi = np.where(lock, 0.0, np.arctan2(R[..., 0, 2], R[..., 1, 2]))
     return np.stack([phi, theta, psi], axis=-1)
+
+
+def continuous_euler_angles(angles: np.ndarray) -> np.ndarray:
+    """Unwrap φ and ψ along a time series (N, 3) of (φ, θ, ψ), bridging gimbal-lock samples.
+
+    Where sin θ = 0 only φ + ψ (θ = 0) or φ - ψ (θ = π) is defined and
+    :func:`euler_angles_from_matrix` puts it all in φ; such samples
+    take ψ from the nearest sample before them (or, at the start, after them), keeping
+    φ ± ψ.  A run that stays at θ = 0 throughout keeps ψ = 0 and φ = φ + ψ.  The time series
+    must be sampled finely enough that φ and ψ change by less than π between samples.
+
+    >>> a = np.array([[3.0, 0.5, 0.2], [-3.0, 0.5, 0.3], [-2.9, 0.0, 0.0]])   # φ wraps, then θ = 0
+    >>> np.round(continuous_euler_angles(a), 4).tolist()
+    [[3.0, 0.5, 0.2], [3.2832, 0.5, 0.3], [3.0832, 0.0, 0.3]]
+    """
+    ang = np.array(angles, dtype=float)
+    if ang.ndim != 2 or len(ang) < 2:
+        return ang
+    lock = np.abs(np.sin(ang[:, 1])) < 1e-12
+    if lock.any() and not lock.all():
+        idx = np.where(~lock, np.arange(len(ang)), -1)
+        prev = np.maximum.accumulate(idx)
+        src = np.where(prev >= 0, prev, int(np.argmax(~lock)))
+        sign = np.where(np.cos(ang[:, 1]) > 0, 1.0, -1.0)
+        total = ang[:, 0] + sign * ang[:, 2]
+        psi = np.where(lock, ang[src, 2], ang[:, 2])
+        ang[:, 0] = np.where(lock, total - sign * psi, ang[:, 0])
+        ang[:, 2] = psi
+    ang[:, 0] = np.unwrap(ang[:, 0])
+    ang[:, 2] = np.unwrap(ang[:, 2])
+    return ang

@@ -256,14 +256,13 @@ def _free_exact(scene: Scene, t: np.ndarray) -> tuple[dict, dict, Any]:
 
 
 def _free_integrate(scene: Scene, t: np.ndarray) -> tuple[dict, dict, Any]:
-    from ..kinematics.rotations import euler_angles_from_matrix
-    from ..systems.free_top.exact import _continuous_euler_angles
+    from ..kinematics.rotations import continuous_euler_angles, euler_angles_from_matrix
     from ..systems.free_top.integrate import integrate_free_top
 
     moments, w0, R0 = _free_setup(scene)
     traj = integrate_free_top(moments, w0, t, R0=R0, method="DOP853", rtol=scene.rtol, atol=scene.rtol * 1e-3)
     cols = _free_columns(scene.quantities, lambda: traj.omega, lambda: traj.R,
-                         lambda: _continuous_euler_angles(euler_angles_from_matrix(traj.R)),
+                         lambda: continuous_euler_angles(euler_angles_from_matrix(traj.R)),
                          lambda: traj.quaternion, moments)
     info = {"error_estimate": float(np.max(traj.error_estimate)) if traj.error_estimate is not None else None,
             "rhs_evaluations": int(traj.n_evaluations)}

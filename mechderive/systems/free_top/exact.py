@@ -54,7 +54,7 @@ from ...special.highprec import complete_pi_mp
 from ...core.validate import as_finite_array, check_rotation_matrix
 from ...errors import DerivationError, InvalidInputError
 from ...inertia.validate import check_principal_moments
-from ...kinematics.rotations import euler_angles_from_matrix, rotation_matrix
+from ...kinematics.rotations import continuous_euler_angles, euler_angles_from_matrix, rotation_matrix
 from ...kinematics.so3 import expm_so3
 
 __all__ = ["FreeTopSolution", "exact_free_top"]
@@ -286,7 +286,7 @@ class FreeTopSolution:
                 and np.array_equal(self._perm, np.eye(3)):
             phi, theta, psi = self._angles(t, continuous=True)
             return np.stack([phi, theta, psi], axis=-1)
-        return _continuous_euler_angles(euler_angles_from_matrix(self.rotation(t)))
+        return continuous_euler_angles(euler_angles_from_matrix(self.rotation(t)))
 
     def rotation(self, t: Any) -> np.ndarray:
         """The chapter's R(t) (rows = body axes in space components), shape (..., 3, 3)."""
@@ -324,31 +324,6 @@ class FreeTopSolution:
         """ω in L-frame components (f1, f2) — its trace on the invariable plane — shape (..., 2)."""
         w_space = np.einsum("...ab,...a->...b", self.rotation(t), self.omega(t))  # ω̃ = Rᵀ ω
         return (w_space @ self._S.T)[..., :2]
-
-
-def _continuous_euler_angles(ang: np.ndarray) -> np.ndarray:
-    """Unwrap φ and ψ along a time series of Euler angles, and bridge gimbal-lock samples.
-
-    Where sin θ vanishes only φ + ψ is defined; such samples take ψ from the nearest
-    sample before (or, at the start, after) them, keeping φ + ψ.
-    """
-    if ang.ndim != 2 or len(ang) < 2:
-        return ang
-    ang = ang.copy()
-    lock = np.abs(np.sin(ang[:, 1])) < 1e-12
-    if lock.any() and not lock.all():
-        idx = np.where(~lock, np.arange(len(ang)), -1)
-        prev = np.maximum.accumulate(idx)
-        first = int(np.argmax(~lock))
-        src = np.where(prev >= 0, prev, first)
-        total = ang[:, 0] + np.where(np.cos(ang[:, 1]) > 0, 1.0, -1.0) * ang[:, 2]
-        psi = np.where(lock, ang[src, 2], ang[:, 2])
-        sign = np.where(np.cos(ang[:, 1]) > 0, 1.0, -1.0)
-        ang[:, 0] = np.where(lock, total - sign * psi, ang[:, 0])
-        ang[:, 2] = psi
-    ang[:, 0] = np.unwrap(ang[:, 0])
-    ang[:, 2] = np.unwrap(ang[:, 2])
-    return ang
 
 
 def exact_free_top(moments: Any, omega0: Any, *, R0: Any = None) -> FreeTopSolution:

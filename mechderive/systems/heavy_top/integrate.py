@@ -70,7 +70,7 @@ import numpy as np
 from ...core.validate import as_finite_array, check_positive
 from ...errors import InvalidInputError, ShapeError, UnphysicalInertiaError
 from ...kinematics.conversions import euler_to_quaternion, quaternion_to_matrix
-from ...kinematics.euler import euler_angles_from_matrix
+from ...kinematics.rotations import continuous_euler_angles, euler_angles_from_matrix  # noqa: F401 (re-exported)
 from ...solvers import kick_drift
 # shared with the free top's integrators: composition weights per order, the error class, the checks of
 # t_eval and the cutting of each output interval into equal steps
@@ -86,38 +86,6 @@ _SCIPY_MIN_RTOL = 2.3e-14  # solve_ivp raises rtol below 100·eps to this
 
 
 # --- results ---------------------------------------------------------------------------------
-
-def continuous_euler_angles(angles: np.ndarray) -> np.ndarray:
-    """Unwrap φ and ψ along a time series (N, 3) of (φ, θ, ψ), bridging gimbal-lock samples.
-
-    Where sin θ = 0 only φ + ψ (θ = 0) or φ - ψ (θ = π) is defined and
-    :func:`~mechderive.kinematics.euler.euler_angles_from_matrix` puts it all in φ; such samples
-    take ψ from the nearest sample before them (or, at the start, after them), keeping
-    φ ± ψ.  A run that stays at θ = 0 throughout keeps ψ = 0 and φ = φ + ψ.  (Same rule as
-    ``mechderive.systems.free_top.exact._continuous_euler_angles``, duplicated because that
-    module was not committed when this one was written — merge into kinematics.euler.)
-
-    >>> a = np.array([[3.0, 0.5, 0.2], [-3.0, 0.5, 0.3], [-2.9, 0.0, 0.0]])   # φ wraps, then θ = 0
-    >>> np.round(continuous_euler_angles(a), 4).tolist()
-    [[3.0, 0.5, 0.2], [3.2832, 0.5, 0.3], [3.0832, 0.0, 0.3]]
-    """
-    ang = np.array(angles, dtype=float)
-    if ang.ndim != 2 or len(ang) < 2:
-        return ang
-    lock = np.abs(np.sin(ang[:, 1])) < 1e-12
-    if lock.any() and not lock.all():
-        idx = np.where(~lock, np.arange(len(ang)), -1)
-        prev = np.maximum.accumulate(idx)
-        src = np.where(prev >= 0, prev, int(np.argmax(~lock)))
-        sign = np.where(np.cos(ang[:, 1]) > 0, 1.0, -1.0)
-        total = ang[:, 0] + sign * ang[:, 2]
-        psi = np.where(lock, ang[src, 2], ang[:, 2])
-        ang[:, 0] = np.where(lock, total - sign * psi, ang[:, 0])
-        ang[:, 2] = psi
-    ang[:, 0] = np.unwrap(ang[:, 0])
-    ang[:, 2] = np.unwrap(ang[:, 2])
-    return ang
-
 
 @dataclass(frozen=True)
 class HeavyTopTrajectory:
