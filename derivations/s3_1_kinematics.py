@@ -8,7 +8,7 @@ sections 3.1–3.1.2 in the catalog (including the path-ordered exponential).
 Run: python derivations/s3_1_kinematics.py [--latex]
 """
 
-from mechderive.catalog.registry import run_claims
+from mechderive.catalog.registry import print_claims, run_claims
 from mechderive.core.display import derivation_args, show
 from mechderive.core.simplify import simplify_trig
 from mechderive.kinematics import euler
@@ -28,7 +28,5 @@ show("Omega", m.convective_angular_velocity_matrix, latex=args.latex)
 
 print("\nChecks of sections 3.1–3.1.2 against the derivations:")
 results = run_claims("3.1")
-for r in results:
-    print(f"  ({r.equation}) {r.status}: {r.detail}")
-if any(r.status == "failed" for r in results):
+if not print_claims(results):
     raise SystemExit(1)

@@ -13,7 +13,7 @@ Run: python derivations/s3_2_inertia.py [--latex]
 
 import sympy as sp
 
-from mechderive.catalog.registry import all_claims, run_claims
+from mechderive.catalog.registry import all_claims, print_claims, run_claims
 from mechderive.core.display import derivation_args, show
 from mechderive.inertia import bodies, principal_axes_symbolic
 from mechderive.inertia.free_body import free_body_model
@@ -78,7 +78,5 @@ show("cross term at the centre of mass", fb.cross_term_at_cm, latex=tex)
 
 print("\nChecks of sections 3.2-3.3 against the derivations:")
 results = run_claims("3.2") + run_claims(claims=[c for c in all_claims("3.3") if c.section == "3.3"])
-for res in results:
-    print(f"  ({res.equation}) {res.status}: {res.detail[:120]}")
-if any(res.status not in ("verified", "misprint") for res in results):
+if not print_claims(results, width=120):
     raise SystemExit(1)

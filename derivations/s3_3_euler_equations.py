@@ -8,7 +8,7 @@ to show that Euler's equations mean dL̃/dt = Rᵀτ — zero for a free body (3
 Run: python derivations/s3_3_euler_equations.py [--latex]
 """
 
-from mechderive.catalog.registry import run_claims
+from mechderive.catalog.registry import print_claims, run_claims
 from mechderive.core.display import derivation_args, show
 from mechderive.systems.free_top import model as ft
 
@@ -27,7 +27,5 @@ show("dL_space/dt", m.space_rate_of_angular_momentum, latex=args.latex)
 
 print("\nChecks against the chapter's printed forms:")
 results = run_claims("3.3.1")
-for r in results:
-    print(f"  ({r.equation}) {r.status}: {r.detail}")
-if any(r.status == "failed" for r in results):
+if not print_claims(results):
     raise SystemExit(1)

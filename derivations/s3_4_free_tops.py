@@ -12,7 +12,7 @@ Run: python derivations/s3_4_free_tops.py [--latex]
 import numpy as np
 import sympy as sp
 
-from mechderive.catalog.registry import run_claims
+from mechderive.catalog.registry import print_claims, run_claims
 from mechderive.core.display import derivation_args, show
 from mechderive.systems.free_top import model as ft
 from mechderive.systems.free_top import stability
@@ -70,7 +70,5 @@ print(f"  fitted {slope:.6f}, derived √(A/I2) = {rate:.6f}, relative differenc
 
 print("\nChecks against the chapter's printed forms:")
 results = run_claims("3.4")
-for r in results:
-    print(f"  ({r.equation}) {r.status}: {r.detail}")
-if any(r.status == "failed" for r in results) or abs(slope / rate - 1) > 0.01:
+if not print_claims(results) or abs(slope / rate - 1) > 0.01:
     raise SystemExit(1)

@@ -7,7 +7,7 @@ out of ω = ṘRᵀ (3.5)–(3.6), then is checked against the printed formulas.
 Run: python derivations/s3_5_euler_angles.py [--latex]
 """
 
-from mechderive.catalog.registry import run_claims
+from mechderive.catalog.registry import print_claims, run_claims
 from mechderive.core.display import derivation_args, show
 from mechderive.kinematics import euler
 
@@ -29,7 +29,5 @@ show("omega_space", m.state_angular_velocity_space, latex=args.latex)
 
 print("\nChecks against the chapter's printed forms:")
 results = run_claims("3.5")
-for r in results:
-    print(f"  ({r.equation}) {r.status}: {r.detail}")
-if any(r.status == "failed" for r in results):
+if not print_claims(results):
     raise SystemExit(1)

@@ -12,7 +12,7 @@ Run: python derivations/s3_6_heavy_top.py [--latex]
 
 import time
 
-from mechderive.catalog.registry import run_claims
+from mechderive.catalog.registry import print_claims, run_claims
 from mechderive.core.display import derivation_args, show
 from mechderive.systems.heavy_top.model import model
 
@@ -72,7 +72,5 @@ print(f"\nDerived {len(m.derived)} quantities in {time.perf_counter() - start:.1
 
 print("\nChecks against the chapter's printed forms:")
 results = run_claims("3.6")
-for r in results:
-    print(f"  ({r.equation}) {r.status}: {r.detail}")
-if any(r.status == "failed" for r in results):
+if not print_claims(results):
     raise SystemExit(1)

@@ -14,7 +14,7 @@ Run: python derivations/s3_7_deformable.py [--latex]
 
 import numpy as np
 
-from mechderive.catalog.registry import run_claims
+from mechderive.catalog.registry import print_claims, run_claims
 from mechderive.core.display import derivation_args, show
 from mechderive.systems.deformable import derivation
 from mechderive.systems.deformable.cat import falling_cat
@@ -42,7 +42,5 @@ print(f"\nThe falling cat: peak bend {np.degrees(cat.peak_bend):.4f}°, net turn
 
 print("\nChecks against the chapter's printed forms:")
 results = run_claims("3.7")
-for r in results:
-    print(f"  ({r.equation}) {r.status}: {r.detail}")
-if any(r.status == "failed" for r in results):
+if not print_claims(results):
     raise SystemExit(1)

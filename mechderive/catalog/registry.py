@@ -20,7 +20,8 @@ import time
 from dataclasses import dataclass, field
 from typing import Any, Callable, Iterable
 
-__all__ = ["Outcome", "Claim", "ClaimResult", "register", "all_claims", "run_claims", "perturb", "SECTION_MODULES"]
+__all__ = ["Outcome", "Claim", "ClaimResult", "register", "all_claims", "run_claims", "print_claims", "perturb",
+           "SECTION_MODULES"]
 
 #: Modules that register the claims of each part of the chapter, imported on first use.
 SECTION_MODULES = (
@@ -171,6 +172,14 @@ def evaluate(claim: Claim) -> ClaimResult:
 def run_claims(section: str | None = None, claims: Iterable[Claim] | None = None) -> list[ClaimResult]:
     """Check every claim (of ``section``), returning one :class:`ClaimResult` per claim."""
     return [evaluate(c) for c in (all_claims(section) if claims is None else claims)]
+
+
+def print_claims(results: list[ClaimResult], *, width: int | None = None) -> bool:
+    """Print one line per result (for the derivations/ scripts); True when none failed."""
+    for r in results:
+        detail = r.detail if width is None else r.detail[:width]
+        print(f"  ({r.equation}) {r.status}: {detail}")
+    return not any(r.status == "failed" for r in results)
 
 
 def perturb(formula: Any) -> Any:
