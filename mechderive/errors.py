@@ -15,6 +15,7 @@ __all__ = [
     "NotARotationError",
     "UnphysicalInertiaError",
     "DerivationError",
+    "IntegrationError",
 ]
 
 
@@ -44,3 +45,7 @@ class UnphysicalInertiaError(InvalidInputError):
 
 class DerivationError(MechDeriveError, RuntimeError):
     """A symbolic derivation did not produce what it must (an internal consistency failure)."""
+
+
+class IntegrationError(MechDeriveError, RuntimeError):
+    """An ODE solver failed (e.g. a torque that blows the solution up)."""

@@ -74,7 +74,9 @@ from ...kinematics.rotations import continuous_euler_angles, euler_angles_from_m
 from ...solvers import kick_drift
 # shared with the free top's integrators: composition weights per order, the error class, the checks of
 # t_eval and the cutting of each output interval into equal steps
-from ..free_top.integrate import SPLITTING_ORDERS, IntegrationError, _check_times, _interval_steps
+from ...errors import IntegrationError  # noqa: F401 (re-exported)
+from ...solvers.dop853 import run_dop853
+from ..free_top.integrate import SPLITTING_ORDERS, _check_times, _interval_steps
 
 __all__ = ["integrate_heavy_top", "integrate_heavy_top_ensemble", "HeavyTopTrajectory", "HeavyTopEnsemble",
            "check_params", "check_initial", "initial_state", "continuous_euler_angles", "IntegrationError",
@@ -82,7 +84,6 @@ __all__ = ["integrate_heavy_top", "integrate_heavy_top_ensemble", "HeavyTopTraje
 
 METHODS = ("DOP853", "splitting")
 from .parameters import INITIAL_KEYS, PARAM_KEYS, check_initial, check_params  # noqa: E402,F401
-_SCIPY_MIN_RTOL = 2.3e-14  # solve_ivp raises rtol below 100·eps to this
 
 
 # --- results ---------------------------------------------------------------------------------
@@ -438,8 +439,6 @@ def _finish(p: dict, t: np.ndarray, omega: np.ndarray, q_raw: np.ndarray, *, met
 
 def _run_dop853(p: dict, w0: np.ndarray, q0: np.ndarray, t: np.ndarray, rtol: float, atol: float,
                 estimate_error: bool) -> HeavyTopTrajectory:
-    from scipy.integrate import solve_ivp
-
     rhs = _rhs()
     args = tuple(_param_values(p))
 
@@ -448,21 +447,11 @@ def _run_dop853(p: dict, w0: np.ndarray, q0: np.ndarray, t: np.ndarray, rtol: fl
 
     y0 = np.concatenate([w0, q0])
 
-    def solve(rt: float, at: float) -> Any:
-        sol = solve_ivp(fun, (t[0], t[-1]), y0, method="DOP853", t_eval=t, rtol=rt, atol=at)
-        if not sol.success:
-            raise IntegrationError(f"expected solve_ivp(DOP853) to reach t = {t[-1]:g}, got: {sol.message}")
-        return sol
-
-    start = time.perf_counter()
-    sol = solve(rtol, atol)
-    wall = time.perf_counter() - start
-    reference, kind = None, "not requested"
-    if estimate_error:
-        rt_ref = max(rtol * 1e-3, _SCIPY_MIN_RTOL)
-        ref = solve(rt_ref, atol * 1e-3)
+    sol, wall, ref, kind = run_dop853(fun, t, y0, rtol, atol, reference=estimate_error)
+    reference = None
+    if ref is not None:
         reference = (ref.y[:3].T, ref.y[3:].T)
-        kind = f"distance to DOP853 at rtol={rt_ref:.2g}, atol={atol * 1e-3:.2g}"
+        kind = f"distance to {kind}"
     return _finish(p, t, sol.y[:3].T.copy(), sol.y[3:].T.copy(), method="DOP853", order=None,
                    n_evaluations=int(sol.nfev), n_steps=None, wall=wall, reference=reference, kind=kind)
 
