@@ -86,6 +86,7 @@ def _rc_one(e):
 
     For |e| < 1e-3 the Maclaurin series Σ (-e)ᵏ/(2k + 1) (DLMF 19.2.19 expanded) to k = 6
     (1e-3⁷/15 < 1e-22) avoids the 0/0; the closed forms elsewhere are accurate to a few ulp.
+    Only the branches some point needs are evaluated (this is R_J's inner loop).
     """
     e = np.asarray(e, dtype=float)
     series = 1 - e * (1 / 3 - e * (1 / 5 - e * (1 / 7 - e * (1 / 9 - e * (1 / 11 - e / 13)))))
@@ -94,20 +95,31 @@ def _rc_one(e):
         return series
     with np.errstate(all="ignore"):
         r = np.sqrt(np.abs(e))
-        closed = np.where(e > 0, np.arctan(r), np.arctanh(r)) / r
+        positive = e > 0
+        if np.all(positive | small):
+            closed = np.arctan(r) / r
+        elif np.all(~positive | small):
+            closed = np.arctanh(r) / r
+        else:
+            closed = np.where(positive, np.arctan(r), np.arctanh(r)) / r
     return np.where(small, series, closed)
 
 
 def _rj_positive(x, y, z, p):
-    """R_J for p > 0 (Carlson 1995, algorithm 3)."""
-    x, y, z, p = (a.copy() for a in _as_float(x, y, z, p))
+    """R_J for p > 0 (Carlson 1995, algorithm 3).
+
+    x, y, z are not broadcast against p: several p (an array of characteristics) for one
+    (x, y, z) share the duplication of x, y, z.
+    """
+    x, y, z, p = (np.asarray(a, dtype=float) for a in (x, y, z, p))
+    shape = np.broadcast(x, y, z, p).shape
     A0 = (x + y + z + 2 * p) / 5.0
     delta = (p - x) * (p - y) * (p - z)
     Q = _QJ * np.maximum(np.maximum(np.abs(A0 - x), np.abs(A0 - y)), np.maximum(np.abs(A0 - z), np.abs(A0 - p)))
-    x0, y0, z0 = x.copy(), y.copy(), z.copy()
-    A = A0.copy()
-    scale = np.ones_like(A)  # 4⁻ᵐ
-    total = np.zeros_like(A)
+    x0, y0, z0 = x, y, z
+    A = A0
+    scale = 1.0  # 4⁻ᵐ
+    total = 0.0
     with np.errstate(all="ignore"):
         for _ in range(_MAX_STEPS):
             if np.all(scale * Q < np.abs(A)):
@@ -115,28 +127,31 @@ def _rj_positive(x, y, z, p):
             sx, sy, sz, sp = np.sqrt(x), np.sqrt(y), np.sqrt(z), np.sqrt(p)
             lam = sx * sy + sx * sz + sy * sz
             d = (sp + sx) * (sp + sy) * (sp + sz)
-            e = delta * scale**3 / (d * d)
+            e = (delta * scale**3) / (d * d)
             total = total + scale * _rc_one(e) / d
-            x, y, z, p, A = (x + lam) / 4, (y + lam) / 4, (z + lam) / 4, (p + lam) / 4, (A + lam) / 4
-            scale = scale / 4
+            x, y, z, p, A = (x + lam) * 0.25, (y + lam) * 0.25, (z + lam) * 0.25, (p + lam) * 0.25, (A + lam) * 0.25
+            scale *= 0.25
         X = (A0 - x0) * scale / A
         Y = (A0 - y0) * scale / A
         Z = (A0 - z0) * scale / A
         P = -(X + Y + Z) / 2
-        E2 = X * Y + X * Z + Y * Z - 3 * P * P
-        E3 = X * Y * Z + 2 * E2 * P + 4 * P**3
-        E4 = (2 * X * Y * Z + E2 * P + 3 * P**3) * P
-        E5 = X * Y * Z * P * P
+        XYZ = X * Y * Z
+        P2 = P * P
+        E2 = X * Y + X * Z + Y * Z - 3 * P2
+        E3 = XYZ + 2 * E2 * P + 4 * P2 * P
+        E4 = (2 * XYZ + E2 * P + 3 * P2 * P) * P
+        E5 = XYZ * P2
         series = (1 - 3 * E2 / 14 + E3 / 6 + 9 * E2 * E2 / 88 - 3 * E4 / 22 - 9 * E2 * E3 / 52 + 3 * E5 / 26)
-        return scale * series / (A * np.sqrt(A)) + 6 * total
+        result = scale * series / (A * np.sqrt(A)) + 6 * total
+    return result if result.shape == shape else np.broadcast_to(result, shape).copy()
 
 
 def elliprj(x, y, z, p):
     """R_J(x, y, z, p) (DLMF 19.16.2); for p < 0 the Cauchy principal value (DLMF 19.20.14)."""
+    if not np.any(np.asarray(p) < 0):
+        return _rj_positive(x, y, z, p)
     x, y, z, p = _as_float(x, y, z, p)
     neg = p < 0
-    if not np.any(neg):
-        return _rj_positive(x, y, z, p)
     out = np.empty(p.shape)
     pos = ~neg
     if np.any(pos):

@@ -73,6 +73,17 @@ __all__ = [
 ]
 
 
+def _once_if_uniform(complete, n_arr: np.ndarray, p):
+    """``complete(n, p)`` shaped like ``n_arr``, computed once per distinct n when m is one number.
+
+    The usual call has one or a few characteristics and one parameter for thousands of phases;
+    evaluating the complete integral per point would double the cost of Π(n; am u | m).
+    """
+    if n_arr.size > 1 and np.size(p.m) == 1 and np.all(n_arr == n_arr.flat[0]):
+        return np.broadcast_to(complete(n_arr.flat[0:1], p), n_arr.shape)
+    return complete(n_arr, p)
+
+
 def ellipk_m1(m1: Any) -> np.ndarray:
     """K(m) = ∫₀^{π/2} dθ/√(1 - m sin²θ) as a function of the complementary parameter m1 = 1 - m.
 
@@ -197,15 +208,12 @@ def elliptic_pi_incomplete(n: Any, phi: Any, m: Any, *, m1: Any = None) -> np.nd
     needs_complete = (j != 0) | (c < 0)
     complete = np.zeros_like(half)
     if np.any(needs_complete):
-        if n_arr.size > 1 and np.size(p.m) == 1 and np.all(n_arr == n_arr.flat[0]):
-            # one (n, m) for every point (the usual case): one complete integral, broadcast
-            complete = np.broadcast_to(complete_pi(n_arr.flat[0:1], p), half.shape)
-        else:
-            complete = complete_pi(n_arr, p)
+        complete = _once_if_uniform(complete_pi, n_arr, p)
     return as_output(assemble(j, s, c, half, complete))
 
 
-def pi_of_am(n: Any, u: Any, m: Any, *, m1: Any = None, periods: Any = None) -> np.ndarray:
+def pi_of_am(n: Any, u: Any, m: Any, *, m1: Any = None, periods: Any = None,
+             jacobi: tuple | None = None) -> np.ndarray:
     """∫₀^U du' / (1 - n sn²(u'|m)) = Π(n; am(U|m) | m) at U = u or U = periods·4K(m) + u.
 
     The form the heavy top's precession and spin angles take (substitute θ = am u', so
@@ -218,6 +226,8 @@ def pi_of_am(n: Any, u: Any, m: Any, *, m1: Any = None, periods: Any = None) -> 
     ``periods`` the result adds periods·4Π(n|m) (in double).  n = 0 gives u; m = 0 gives
     Π(n; u|0); m = 1 gives ∫ du'/(1 - n tanh²u').  Same n support as
     :func:`elliptic_pi_incomplete` (n = 1 needs |U| < K; n > 1 is a principal value).
+    ``jacobi``: optionally ``reduced_sn_cn_dn(u, parameter(m, m1))[:4]`` (sn, cn, dn, j at u,
+    from :mod:`mechderive.special._sncndn`) when the caller has them already, e.g. for θ(t).
 
     >>> print(f"{float(pi_of_am(0.3, 1.2, 0.5)):.15f}")
     1.342965850035253
@@ -227,11 +237,18 @@ def pi_of_am(n: Any, u: Any, m: Any, *, m1: Any = None, periods: Any = None) -> 
     p = parameter(m, m1)
     n_arr = as_finite_array(n, "n")
     u_arr = as_finite_array(u, "u")
-    n_arr, u_arr, _ = np.broadcast_arrays(n_arr, u_arr, p.m)
+    # sn, cn, dn on the shape of (u, m) only: several n (shape (k, 1) against u of shape (N,))
+    # then share one evaluation of the Jacobi functions
+    u_arr, _ = np.broadcast_arrays(u_arr, p.m)
     one = np.broadcast_to(p.m1 == 0, u_arr.shape)
     # m = 1 and |u| > 30: tanh u = ±1 in double, the integrand is 1/(1 - n) to e^-60
     cap = np.where(one & (np.abs(u_arr) > 30.0), np.sign(u_arr) * 30.0, u_arr)
-    sn, cn, dn, j, _, _, _ = reduced_sn_cn_dn(cap, p)
+    if jacobi is not None and not np.any(one):
+        sn, cn, dn, j = jacobi
+    else:
+        sn, cn, dn, j = reduced_sn_cn_dn(cap, p)[:4]
+    n_given = n_arr  # unbroadcast: the complete integrals depend on n and m only
+    n_arr, u_arr, cap, one, sn, cn, dn, j = np.broadcast_arrays(n_arr, u_arr, cap, one, sn, cn, dn, j)
     parity = np.where(np.fmod(j, 2.0) == 0.0, 1.0, -1.0)
     sn, cn = parity * sn, parity * cn                  # sn(r), cn(r): u = j·2K + r
     bad = (n_arr == 1) & ~one & ((j != 0) | (cn <= 0))
@@ -254,12 +271,13 @@ def pi_of_am(n: Any, u: Any, m: Any, *, m1: Any = None, periods: Any = None) -> 
         part = np.where(past, -half, half)
         if np.any(jeff != 0):
             with np.errstate(invalid="ignore"):
-                part = part + np.where(jeff != 0, 2.0 * jeff * complete_pi_rj(n_arr, p), 0.0)
+                part = part + np.where(jeff != 0, 2.0 * jeff * _once_if_uniform(complete_pi_rj, n_given, p), 0.0)
         result = cap + n_arr / 3.0 * part
     if np.any(neg):
         # n < -1/4: 2jΠ(n|m) + Π(n; am r|m), both by the change of parameter (no cancellation)
         half = pi_half(n_arr, sn, cn, dn * dn, np.broadcast_to(p.m, sn.shape))
-        complete = complete_pi(n_arr, p) if np.any(jeff != 0) else np.zeros_like(half)
+        complete = np.broadcast_to(_once_if_uniform(complete_pi, n_given, p), half.shape) if np.any(jeff != 0) \
+            else np.zeros_like(half)
         result = np.where(neg, assemble(j, sn, cn, half, complete), result)
     with np.errstate(all="ignore"):
         result = np.where(cap != u_arr, result + (u_arr - cap) / (1.0 - n_arr), result)

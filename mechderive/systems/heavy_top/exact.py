@@ -141,11 +141,17 @@ class _Pass:
         return self._get("phase", lambda: self.sol._phase(self.t))
 
     def jacobi(self):
-        from ...special.jacobi import jacobi_sn_cn_dn
+        """sn, cn, dn of the reduced phase r."""
+        return self.reduced_jacobi()[:3]
+
+    def reduced_jacobi(self):
+        """sn, cn, dn and the half-period count of r, shared by θ (sn, cn) and Π."""
+        from ...special._parameter import parameter
+        from ...special._sncndn import reduced_sn_cn_dn
 
         def make():
-            sn, cn, dn = jacobi_sn_cn_dn(self.phase()[1], self.sol.m, m1=self.sol.m1)
-            return np.asarray(sn), np.asarray(cn), np.asarray(dn)
+            r = np.asarray(self.phase()[1], dtype=float)
+            return reduced_sn_cn_dn(r, parameter(self.sol.m, self.sol.m1))[:4]
         return self._get("jacobi", make)
 
     def amplitude(self):
@@ -154,14 +160,35 @@ class _Pass:
         return self._get("am", lambda: np.asarray(jacobi_am(self.phase()[1], self.sol.m, m1=self.sol.m1)))
 
     def pi(self, n: float):
-        # Π(n; am r | m) straight from the phase r (sn, cn, dn of r): going through am(r) would
-        # amplify its rounding by 1/dn near the turning points when m → 1.
+        """Π(n; am r | m) for the characteristic ``n`` (after :meth:`pis`, which batches them)."""
+        self.pis([n])
+        return self._cache[f"pi({n!r})"]
+
+    def pis(self, ns) -> None:
+        """Π(n; am r | m) for every n in ``ns`` not yet computed, straight from the phase r.
+
+        One call for all n shares sn, cn, dn of r; going through am(r) would amplify its rounding
+        by 1/dn near the turning points when m → 1.
+        """
         from ...special.integrals import pi_of_am
 
-        n1 = self.sol._mp.get("one_minus_n", {}).get(n)
-        if n1 is not None and n1 < 1e-3 and self.sol._period is not None:
-            return self._get(f"pi({n!r})", lambda: self._pi_near_one(n, n1))
-        return self._get(f"pi({n!r})", lambda: np.asarray(pi_of_am(n, self.phase()[1], self.sol.m, m1=self.sol.m1)))
+        one_minus_n = self.sol._mp.get("one_minus_n", {})
+        batch = []
+        for n in ns:
+            if f"pi({n!r})" in self._cache:
+                continue
+            n1 = one_minus_n.get(n)
+            if n1 is not None and n1 < 1e-3 and self.sol._period is not None:
+                self._get(f"pi({n!r})", lambda: self._pi_near_one(n, n1))
+            else:
+                batch.append(n)
+        if batch:
+            shape = np.shape(self.phase()[1])
+            flat = [np.reshape(x, (1, -1)) for x in self.reduced_jacobi()]
+            values = np.asarray(pi_of_am(np.array(batch)[:, None], np.reshape(self.phase()[1], (1, -1)),
+                                         self.sol.m, m1=self.sol.m1, jacobi=tuple(flat)))
+            for n, value in zip(batch, values):
+                self._get(f"pi({n!r})", lambda: value.reshape(shape))
 
     def _pi_near_one(self, n: float, n1: float) -> np.ndarray:
         """Π(n; am r | m) for n close to 1 with 1 - n = ``n1`` known to full relative accuracy.
@@ -230,6 +257,7 @@ class _Pass:
             return spec.start + (mod_two_pi(spec.rate, t) if reduced else spec.rate * t)
         j, r = self.phase()
         value = spec.start + spec.c0_over_kappa * (r - sol._v0.hi - sol._v0.lo)
+        self.pis([n for _, n, _ in spec.terms])
         for c, n, pi0 in spec.terms:
             value = value + c * (self.pi(n) - pi0)
         if spec.per_period is None:
@@ -255,6 +283,7 @@ class _Pass:
                 pi0s[n] = pi0
         c0 = 0.5 * (a.c0_over_kappa + sign * b.c0_over_kappa)
         value = 0.5 * (a.start + sign * b.start) + c0 * (r - sol._v0.hi - sol._v0.lo)
+        self.pis([n for n, c in coeffs.items() if c != 0.0])
         for n, c in coeffs.items():
             if c != 0.0:
                 value = value + c * (self.pi(n) - pi0s[n])
@@ -635,8 +664,9 @@ def _setup(params: dict, init: dict) -> HeavyTopSolution:
         _one_minus_u2=float(1 - u_2), _one_plus_u1=float(1 + u_1), _theta_const=float(th0),
         _mp=dict(steady=False, I1=I1, I3=I3, a=a, b=b, roots=roots, kappa=kappa, m=m, m1=m1, A0=A0, K=K,
                  v0_reduced=float(v0 - 2 * K * mpmath.floor(v0 / (2 * K))) if period is not None else float(v0),
-                 pole_sign=_passage_sign(mpmath.ellipfun("cn", v0, m=m), -mpmath.ellipfun("sn", v0, m=m), S[1]),
-                 bottom_sign=_passage_sign(mpmath.ellipfun("sn", v0, m=m), mpmath.ellipfun("cn", v0, m=m), -S[1]),
+                 # sn v0 = sin A0, cn v0 = cos A0 exactly (v0 = F(A0|m), DLMF 22.16.1)
+                 pole_sign=_passage_sign(mpmath.cos(A0), -mpmath.sin(A0), S[1]),
+                 bottom_sign=_passage_sign(mpmath.sin(A0), mpmath.cos(A0), -S[1]),
                  scale=scale), **common)
 
 
@@ -681,22 +711,30 @@ def _angle_setup(sol: HeavyTopSolution) -> dict[str, _Angle]:
     frac_args = (v["I1"], v["I3"], v["a"], v["b"], *v["roots"])
     kappa, A0, m = v["kappa"], v["A0"], v["m"]
     K = float(v["K"])
+    flats = {name: _fractions(f[name], frac_args) for name in ("phi", "psi")}
+    kept = {name: [(c, n) for c, n in zip(flat[1::2], flat[2::2])
+                   if mpmath.isfinite(c) and mpmath.isfinite(n)
+                   and abs(c) > v["scale"] * (abs(v["a"]) + abs(v["b"]) + 1)]
+            for name, flat in flats.items()}  # b = ±a: the apex passes through the pole (bottom), no n₊ (n₋) term
+    # φ and ψ share their characteristics n±: one vectorised Π call for all of them
+    ns = sorted({n for terms in kept.values() for _, n in terms})
+    far = [n for n in ns if 1 - n >= mpmath.mpf("1e-3")]
+    pi0 = {n: float(mpmath.ellippi(n, A0, m)) for n in ns if n not in far}  # near the pole: 1 - n keeps its digits
+    if far:
+        n_far = np.array([float(n) for n in far])
+        pi0.update(zip(far, np.atleast_1d(elliptic_pi_incomplete(n_far, float(A0), sol.m, m1=sol.m1)).tolist()))
+    if sol._period is not None and ns:
+        complete = dict(zip(ns, np.atleast_1d(elliptic_pi(np.array([float(n) for n in ns]), sol.m, m1=sol.m1)).tolist()))
+    for n in ns:
+        sol._mp.setdefault("one_minus_n", {})[float(n)] = float(1 - n)  # exact at 40 digits
     out = {}
     for name in ("phi", "psi"):
-        flat = _fractions(f[name], frac_args)
-        c0 = flat[0]
+        c0 = flats[name][0]
         terms, per = [], float(c0 / kappa) * 2 * K if sol._period is not None else None
-        for c, n in zip(flat[1::2], flat[2::2]):
-            if not mpmath.isfinite(c) or not mpmath.isfinite(n) or abs(c) <= v["scale"] * (abs(v["a"]) + abs(v["b"]) + 1):
-                continue  # b = ±a: the apex passes through the pole (bottom), the n₊ (n₋) term is absent
-            if 1 - n < mpmath.mpf("1e-3"):
-                pi0 = float(mpmath.ellippi(n, A0, m))  # near the pole: 1 - n must keep its digits
-            else:
-                pi0 = float(elliptic_pi_incomplete(float(n), float(A0), sol.m, m1=sol.m1))
-            terms.append((float(c / kappa), float(n), pi0))
-            sol._mp.setdefault("one_minus_n", {})[float(n)] = float(1 - n)  # exact at 40 digits
+        for c, n in kept[name]:
+            terms.append((float(c / kappa), float(n), pi0[n]))
             if per is not None:
-                per += float(c / kappa) * 2 * float(elliptic_pi(float(n), sol.m, m1=sol.m1))
+                per += float(c / kappa) * 2 * complete[n]
         out[name] = _Angle(name, float(sol.initial[name]), float(c0 / kappa), tuple(terms),
                            None if per is None else DD(per, 0.0), 0.0)
     return out
