@@ -17,7 +17,7 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-__all__ = ["compile_expressions", "compile_scalar", "compile_cache_info", "clear_compile_cache"]
+__all__ = ["compile_expressions", "compile_cached", "compile_scalar", "compile_cache_info", "clear_compile_cache"]
 
 _CACHE: dict[str, Callable[..., Any]] = {}
 _LOCK = threading.Lock()
@@ -101,6 +101,19 @@ def wrap_vectorised(raw: Callable[..., Any], arg_names: Sequence[str], shape: tu
     compiled.args = tuple(arg_names)  # type: ignore[attr-defined]
     compiled.shape = tuple(shape)  # type: ignore[attr-defined]
     return compiled
+
+
+def compile_cached(name: str, build: Callable[[], tuple[Sequence[Any], Any]]) -> Callable[..., np.ndarray]:
+    """Like :func:`compile_expressions`, with the generated code kept in the disk cache under ``name``.
+
+    ``build() -> (argument symbols, expressions)`` derives, and runs only when neither this process
+    nor the disk cache (:mod:`.codecache`) has ``name``: a warm process neither derives nor
+    imports SymPy.  ``name`` must identify what ``build`` derives.
+    """
+    from .codecache import cached_lambdify, shape_of
+
+    raw, meta = cached_lambdify(name, build, module="numpy")
+    return wrap_vectorised(raw, meta["args"].split(",") if meta.get("args") else [], shape_of(meta), name)
 
 
 def compile_scalar(exprs: Any, args: Sequence[Any], *, name: str = "f") -> Callable[..., Any]:

@@ -14,8 +14,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from ..core.codecache import cached_lambdify, shape_of
-from ..core.compile import wrap_vectorised
+from ..core.compile import compile_cached
 from ..core.validate import as_finite_array, check_rotation_matrix
 
 __all__ = ["rotation_matrix", "angular_velocity_body", "angular_velocity_space", "euler_rates",
@@ -36,8 +35,7 @@ def _build(quantity: str, names: tuple[str, ...]) -> Callable[[], tuple]:
 
 @functools.cache
 def _function(quantity: str, names: tuple[str, ...]) -> Callable[..., np.ndarray]:
-    raw, meta = cached_lambdify(f"kinematics.{quantity}", _build(quantity, names), module="numpy")
-    return wrap_vectorised(raw, list(names), shape_of(meta), quantity)
+    return compile_cached(f"kinematics.{quantity}", _build(quantity, names))
 
 
 def rotation_matrix(phi: Any, theta: Any, psi: Any) -> np.ndarray:

@@ -16,8 +16,12 @@ compiled together into one scalar function with :func:`compile_scalar`.
 Methods (``method=``):
 
 ``"DOP853"``
-    :func:`scipy.integrate.solve_ivp` (Dormand–Prince 8(5,3), adaptive), ``rtol`` /
-    ``atol`` (default 1e-10 / 1e-12, applied to ω and q alike), output at ``t_eval``.
+    Dormand–Prince 8(5,3), adaptive, ``rtol`` / ``atol`` (default 1e-10 / 1e-12, applied to ω
+    and q alike), output at ``t_eval`` by the 7th-order dense output.  ``backend="auto"``
+    (default) runs it compiled to C with the derived right-hand side
+    (:mod:`mechderive.solvers.dop853_c`) where a C compiler is found and no ``torque`` is
+    given, else SciPy's :func:`scipy.integrate.solve_ivp` (the same steps, ~100× slower);
+    ``"c"`` or ``"scipy"`` choose.
     The quaternion is integrated unconstrained — |q| is a first integral of
     q̇ = ½ q ⊗ (0, ω), so its drift measures the integrator's error — then
     *projected* (q/|q|) at output; the drift before projection is reported, not hidden.
@@ -57,7 +61,7 @@ from ...core.validate import as_finite_array, check_positive, check_rotation_mat
 from ...errors import IntegrationError, InvalidInputError, ShapeError  # noqa: F401 (IntegrationError re-exported)
 from ...kinematics.conversions import matrix_to_quaternion, quaternion_to_matrix
 from ...solvers import lie_poisson
-from ...solvers.dop853 import run_dop853
+from ...solvers.dop853 import check_backend, run_dop853
 from ...solvers.composition import suzuki_fractal, yoshida6
 
 __all__ = ["integrate_free_top", "integrate_free_top_ensemble", "FreeTopTrajectory", "FreeTopEnsemble",
@@ -86,10 +90,12 @@ class FreeTopTrajectory:
     angular_momentum_drift : max_t | |L|(t) - |L|(t0) | / |L|(t0), |L|² from (3.47).
     quaternion_norm_drift : max_t | |q| - 1 | before projection.
     n_evaluations : right-hand-side evaluations (DOP853) or exact axis sub-flows (splitting).
-    n_steps : accepted steps (DOP853: not reported by SciPy, so ``None``) or fixed steps (splitting).
+    n_steps : accepted steps (compiled DOP853; SciPy's does not report them: ``None``) or fixed
+        steps (splitting).
     error_estimate : estimated max_t |ω - ω_exact| (rad/s), or ``None`` if not requested.
     error_estimate_kind : how it was obtained (see :func:`integrate_free_top`).
     wall_time : seconds spent in the main run (excluding the error-estimate run).
+    backend : ``"c"`` (compiled DOP853), ``"scipy"`` (solve_ivp) or ``"python"`` (the splitting).
     """
 
     t: np.ndarray
@@ -105,6 +111,7 @@ class FreeTopTrajectory:
     error_estimate: float | None
     error_estimate_kind: str
     wall_time: float
+    backend: str = "scipy"
 
     @functools.cached_property
     def R(self) -> np.ndarray:
@@ -154,16 +161,36 @@ def _state_rhs() -> Callable[..., list]:
     return compile_scalar(exprs, [*w, *q, I1, I2, I3, *tau_symbols], name="free_top_state_rhs")
 
 
+def _compiled_dop853() -> Any:
+    """The DOP853 stepper compiled to C with (ω̇, q̇) of the free body (τ as parameters), or None."""
+    from ...solvers.dop853_c import compiled_dop853
+
+    def build():
+        import sympy as sp
+
+        from ...solvers.quaternion import quaternion_rate_expressions
+        from .model import I1, I2, I3, model, omega_symbols, tau_symbols
+
+        w = omega_symbols()
+        q = sp.symbols("q0:4", real=True)
+        exprs = sp.Matrix([*model().euler_rhs, *quaternion_rate_expressions(q, w)])
+        return exprs, [*w, *q], [I1, I2, I3, *tau_symbols]
+    return compiled_dop853("free_top", build)
+
+
 @functools.cache
 def _invariants() -> tuple[Callable[..., Any], Callable[..., Any]]:
-    """Vectorised T(ω, I) (3.46) and L²(ω, I) (3.47), compiled from the model."""
-    from ...core.compile import compile_expressions
-    from .model import I1, I2, I3, model, omega_symbols
+    """Vectorised T(ω, I) (3.46) and L²(ω, I) (3.47), compiled from the model (disk-cached)."""
+    from ...core.compile import compile_cached
 
-    args = [*omega_symbols(), I1, I2, I3]
-    m = model()
-    return (compile_expressions(m.energy, args, name="free_top_energy"),
-            compile_expressions(m.angular_momentum_squared, args, name="free_top_L_squared"))
+    def build(quantity: str):
+        def derive():
+            from .model import I1, I2, I3, model, omega_symbols
+
+            return [*omega_symbols(), I1, I2, I3], getattr(model(), quantity)
+        return derive
+    return (compile_cached("free_top.energy", build("energy")),
+            compile_cached("free_top.L_squared", build("angular_momentum_squared")))
 
 
 def _drifts(omega: np.ndarray, inertia: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -235,7 +262,8 @@ def _project(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def integrate_free_top(I: Sequence[float], omega0: Sequence[float], t_eval: Sequence[float], *,
                        R0: Any = None, method: str = "DOP853", rtol: float | None = None,
                        atol: float | None = None, step: float | None = None, order: int | None = None,
-                       torque: Torque | None = None, estimate_error: bool = True) -> FreeTopTrajectory:
+                       torque: Torque | None = None, estimate_error: bool = True,
+                       backend: str = "auto") -> FreeTopTrajectory:
     """Integrate Euler's equations (3.33) and the orientation from ω(t_eval[0]) = omega0, R(t_eval[0]) = R0.
 
     Parameters
@@ -246,7 +274,10 @@ def integrate_free_top(I: Sequence[float], omega0: Sequence[float], t_eval: Sequ
     R0 : initial rotation matrix (e_a = R_ab ẽ_b); default the identity.
     method : ``"DOP853"`` (adaptive; ``rtol``, ``atol``, ``torque``) or ``"splitting"``
         (geometric, fixed step ``step`` (s), ``order`` 2, 4 (default) or 6; free body only).
-    torque : τ(t, ω, R) -> body components (3,) of the applied torque (DOP853 only).
+    torque : τ(t, ω, R) -> body components (3,) of the applied torque (DOP853 only; runs on SciPy,
+        since it calls back into Python).
+    backend : DOP853 only: ``"auto"``, ``"c"`` (raises :class:`IntegrationError` without a C
+        compiler, or with a torque) or ``"scipy"``.
     estimate_error : estimate max_t |ω - ω_exact| (rad/s) by one extra run, reported in
         ``error_estimate`` with its recipe in ``error_estimate_kind``:
         DOP853 — max |ω - ω_ref| with ω_ref rerun at rtol/1000, atol/1000 (rtol floored at
@@ -259,6 +290,7 @@ def integrate_free_top(I: Sequence[float], omega0: Sequence[float], t_eval: Sequ
     :class:`~mechderive.errors.InvalidInputError` on bad input, :class:`IntegrationError` if SciPy fails.
     """
     method = _check_method(method)
+    backend = check_backend(backend)
     inertia = _check_inertia(I, (3,))
     w0 = as_finite_array(omega0, "omega0", shape=(3,))
     t = _check_times(t_eval)
@@ -272,7 +304,10 @@ def integrate_free_top(I: Sequence[float], omega0: Sequence[float], t_eval: Sequ
         atol = 1e-12 if atol is None else check_positive(atol, "atol")
         if torque is not None and not callable(torque):
             raise InvalidInputError(f"expected `torque` to be callable τ(t, omega, R), got {torque!r}")
-        return _run_dop853(inertia, w0, q0, t, rtol, atol, torque, estimate_error)
+        return _run_dop853(inertia, w0, q0, t, rtol, atol, torque, estimate_error, backend)
+    if backend != "auto":
+        raise InvalidInputError(f"expected `backend` only with method='DOP853', got backend={backend!r} "
+                                "with method='splitting'")
     for name, value in (("rtol", rtol), ("atol", atol)):
         if value is not None:
             raise InvalidInputError(f"expected `{name}` only with method='DOP853', got {name}={value!r} "
@@ -337,11 +372,22 @@ def integrate_free_top_ensemble(I: Any, omega0: Any, t_eval: Sequence[float], *,
 # --- the two methods -------------------------------------------------------------------------
 
 def _run_dop853(inertia: np.ndarray, w0: np.ndarray, q0: np.ndarray, t: np.ndarray, rtol: float, atol: float,
-                torque: Torque | None, estimate_error: bool) -> FreeTopTrajectory:
-    rhs = _state_rhs()
+                torque: Torque | None, estimate_error: bool, backend: str) -> FreeTopTrajectory:
     I1, I2, I3 = (float(x) for x in inertia)
+    compiled = None
+    if backend == "c" and torque is not None:
+        raise IntegrationError("expected backend='auto' or 'scipy' with a torque (it calls back into Python), "
+                               "got backend='c'")
+    if backend != "scipy" and torque is None:
+        compiled = _compiled_dop853()
+        if compiled is None and backend == "c":
+            raise IntegrationError("expected a C compiler for backend='c' (cc, gcc or clang on PATH, or $CC; "
+                                   "MECHDERIVE_NO_C unset), found none; use backend='auto' or 'scipy'")
+    rhs = _state_rhs() if compiled is None else None
 
-    if torque is None:
+    if compiled is not None:
+        fun = None
+    elif torque is None:
         def fun(_t: float, y: np.ndarray) -> list:
             return rhs(*y.tolist(), I1, I2, I3, 0.0, 0.0, 0.0)
     else:
@@ -356,7 +402,8 @@ def _run_dop853(inertia: np.ndarray, w0: np.ndarray, q0: np.ndarray, t: np.ndarr
 
     y0 = np.concatenate([w0, q0])
 
-    sol, wall, ref, kind = run_dop853(fun, t, y0, rtol, atol, reference=estimate_error)
+    sol, wall, ref, kind = run_dop853(fun, t, y0, rtol, atol, reference=estimate_error, compiled=compiled,
+                                      params=(I1, I2, I3, 0.0, 0.0, 0.0))
     omega = sol.y[:3].T.copy()
     quat, norm_drift = _project(sol.y[3:].T)
     err = None
@@ -366,8 +413,9 @@ def _run_dop853(inertia: np.ndarray, w0: np.ndarray, q0: np.ndarray, t: np.ndarr
     e_drift, l_drift = _drifts(omega, inertia)
     return FreeTopTrajectory(t=t, omega=omega, quaternion=quat, method="DOP853", order=None,
                              energy_drift=float(e_drift), angular_momentum_drift=float(l_drift),
-                             quaternion_norm_drift=float(norm_drift), n_evaluations=int(sol.nfev), n_steps=None,
-                             error_estimate=err, error_estimate_kind=kind, wall_time=wall)
+                             quaternion_norm_drift=float(norm_drift), n_evaluations=int(sol.nfev), n_steps=sol.steps,
+                             error_estimate=err, error_estimate_kind=kind, wall_time=wall,
+                             backend="scipy" if compiled is None else "c")
 
 
 def _interval_steps(t: np.ndarray, step: float, refine: int = 1) -> list[tuple[int, float]]:
@@ -408,4 +456,4 @@ def _run_splitting(inertia: np.ndarray, w0: np.ndarray, q0: np.ndarray, t: np.nd
     return FreeTopTrajectory(t=t, omega=omega, quaternion=quat, method="splitting", order=order,
                              energy_drift=float(e_drift), angular_momentum_drift=float(l_drift),
                              quaternion_norm_drift=float(norm_drift), n_evaluations=n_sub, n_steps=n_steps,
-                             error_estimate=err, error_estimate_kind=kind, wall_time=wall)
+                             error_estimate=err, error_estimate_kind=kind, wall_time=wall, backend="python")

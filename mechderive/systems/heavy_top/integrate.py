@@ -29,9 +29,12 @@ rad/s): ``theta`` in [0, π] is required, the others default to 0.
 Methods (``method=``):
 
 ``"DOP853"``
-    :func:`scipy.integrate.solve_ivp`, adaptive, on (ω, q); ``rtol`` (default 1e-10), ``atol``
-    (default rtol/100).  |q| is a first integral of q̇ = ½ q ⊗ (0, ω); it is integrated
-    unconstrained and projected at output (its drift is reported).
+    Adaptive, order 8, on (ω, q); ``rtol`` (default 1e-10), ``atol`` (default rtol/100).
+    ``backend="auto"`` (default) runs the stepper compiled to C together with the derived
+    right-hand side (:mod:`mechderive.solvers.dop853_c`, ~1 µs a step) where a C compiler is
+    found, else SciPy's :func:`scipy.integrate.solve_ivp` (the same algorithm and steps, ~100×
+    slower); ``"c"`` or ``"scipy"`` choose.  |q| is a first integral of q̇ = ½ q ⊗ (0, ω); it is
+    integrated unconstrained and projected at output (its drift is reported).
 
 ``"splitting"``
     The kick–drift–kick splitting H = T + V (:mod:`mechderive.solvers.kick_drift`): the free
@@ -75,7 +78,7 @@ from ...solvers import kick_drift
 # shared with the free top's integrators: composition weights per order, the error class, the checks of
 # t_eval and the cutting of each output interval into equal steps
 from ...errors import IntegrationError  # noqa: F401 (re-exported)
-from ...solvers.dop853 import run_dop853
+from ...solvers.dop853 import check_backend, run_dop853
 from ..free_top.integrate import SPLITTING_ORDERS, _check_times, _interval_steps
 
 __all__ = ["integrate_heavy_top", "integrate_heavy_top_ensemble", "HeavyTopTrajectory", "HeavyTopEnsemble",
@@ -105,11 +108,13 @@ class HeavyTopTrajectory:
     quaternion_norm_drift : max_t | |q| - 1 | before projection.
     n_evaluations : right-hand-side evaluations (DOP853) or compiled stage calls (splitting:
         each one exact free-top drift plus one kick).
-    n_steps : fixed steps (splitting) or ``None`` (DOP853: SciPy does not report accepted steps).
+    n_steps : fixed steps (splitting), accepted steps (compiled DOP853) or ``None`` (SciPy's
+        DOP853 does not report them).
     omega_error_estimate : estimated max_t |ω - ω_exact| (rad/s), or ``None``.
     angle_error_estimate : estimated max_t of the rotation angle between R and R_exact (rad), or ``None``.
     error_estimate_kind : how the estimates were obtained (see :func:`integrate_heavy_top`).
     wall_time : seconds spent in the main integration (excluding the error-estimate rerun).
+    backend : ``"c"`` (compiled DOP853), ``"scipy"`` (solve_ivp) or ``"python"`` (the splitting).
     """
 
     t: np.ndarray
@@ -128,6 +133,7 @@ class HeavyTopTrajectory:
     angle_error_estimate: float | None
     error_estimate_kind: str
     wall_time: float
+    backend: str = "scipy"
 
     @functools.cached_property
     def R(self) -> np.ndarray:
@@ -204,16 +210,30 @@ def _rhs() -> Callable[..., list]:
     return compile_scalar(model().rhs, [*state, *par], name="heavy_top_rhs")
 
 
+def _compiled_dop853() -> Any:
+    """The DOP853 stepper compiled to C with (ω̇, q̇), or None without a C compiler (or with it switched off)."""
+    from ...solvers.dop853_c import compiled_dop853
+
+    def build():
+        from .rigid_model import model
+
+        state, _, par = _symbols()
+        return model().rhs, state, par
+    return compiled_dop853("heavy_top", build)
+
+
 @functools.cache
 def _euler_rates_to_omega() -> Callable[..., Any]:
-    """Vectorised ω(φ, θ, ψ, φ̇, θ̇, ψ̇), shape (..., 3), compiled from the model."""
-    from ...core.compile import compile_expressions
-    from ...core.symbols import state_symbol
-    from .rigid_model import model
+    """Vectorised ω(φ, θ, ψ, φ̇, θ̇, ψ̇), shape (..., 3), compiled from the model (disk-cached)."""
+    from ...core.compile import compile_cached
 
-    names = ("phi", "theta", "psi", "phi_dot", "theta_dot", "psi_dot")
-    return compile_expressions(list(model().angular_velocity_from_euler_rates), [state_symbol(n) for n in names],
-                               name="heavy_top_euler_rates_to_omega")
+    def build():
+        from ...core.symbols import state_symbol
+        from .rigid_model import model
+
+        names = ("phi", "theta", "psi", "phi_dot", "theta_dot", "psi_dot")
+        return [state_symbol(n) for n in names], list(model().angular_velocity_from_euler_rates)
+    return compile_cached("heavy_top.euler_rates_to_omega", build)
 
 
 @functools.cache
@@ -232,13 +252,16 @@ def _stage(vectorised: bool = False) -> Callable[..., Any]:
 
 @functools.cache
 def _invariants() -> Callable[..., Any]:
-    """Vectorised (E, p_φ, p_ψ)(ω, q, params), compiled from the model."""
-    from ...core.compile import compile_expressions
-    from .rigid_model import model
+    """Vectorised (E, p_φ, p_ψ)(ω, q, params), compiled from the model (disk-cached)."""
+    from ...core.compile import compile_cached
 
-    state, _, par = _symbols()
-    m = model()
-    return compile_expressions([m.energy, m.p_phi, m.p_psi], [*state, *par], name="heavy_top_invariants")
+    def build():
+        from .rigid_model import model
+
+        state, _, par = _symbols()
+        m = model()
+        return [*state, *par], [m.energy, m.p_phi, m.p_psi]
+    return compile_cached("heavy_top.rigid_invariants", build)
 
 
 def _param_values(p: Mapping[str, Any]) -> list[Any]:
@@ -315,7 +338,7 @@ def _rotation_angle_between(q: np.ndarray, q_ref: np.ndarray) -> np.ndarray:
 def integrate_heavy_top(params: Mapping[str, float], initial: Mapping[str, float], t_eval: Sequence[float], *,
                         method: str = "DOP853", rtol: float | None = None, atol: float | None = None,
                         step: float | None = None, order: int | None = None,
-                        estimate_error: bool = True) -> HeavyTopTrajectory:
+                        estimate_error: bool = True, backend: str = "auto") -> HeavyTopTrajectory:
     """Integrate the heavy symmetric top from Euler angles and rates at ``t_eval[0]``.
 
     Parameters
@@ -325,12 +348,14 @@ def integrate_heavy_top(params: Mapping[str, float], initial: Mapping[str, float
     initial : dict(theta, phi, psi, theta_dot, phi_dot, psi_dot) (rad, rad/s); θ ∈ [0, π]
         required, the others default to 0; checked by :func:`check_initial`.
     t_eval : strictly increasing output times (s), at least 2.
-    method : ``"DOP853"`` (``rtol``, ``atol``) or ``"splitting"`` (``step`` (s) required,
-        ``order`` 2, 4 (default) or 6).
+    method : ``"DOP853"`` (``rtol``, ``atol``, ``backend``) or ``"splitting"`` (``step`` (s)
+        required, ``order`` 2, 4 (default) or 6).
+    backend : DOP853 only: ``"auto"`` (compiled C where a C compiler is found, else SciPy),
+        ``"c"`` (raises :class:`IntegrationError` without a compiler) or ``"scipy"``.
     estimate_error : estimate the error by one extra run, reported in ``omega_error_estimate``
         (rad/s), ``angle_error_estimate`` (rad) and ``error_estimate_kind``:
         DOP853 — the distance to a rerun at rtol/1000, atol/1000 (rtol floored at 2.3e-14,
-        SciPy's limit: from rtol ≈ 1e-11 on the rerun is < 1000× tighter and the figure a
+        SciPy's limit, on both backends: from rtol ≈ 1e-11 on the rerun is < 1000× tighter and the figure a
         lower bound); splitting — Richardson with the known order p,
         |y_h - y_(h/2)| · 2^p / (2^p - 1) (the rerun costs twice the main run).
 
@@ -339,6 +364,7 @@ def integrate_heavy_top(params: Mapping[str, float], initial: Mapping[str, float
     on bad input, :class:`IntegrationError` if SciPy fails.
     """
     method = _check_method(method)
+    backend = check_backend(backend)
     p = check_params(params)
     if any(np.ndim(v) for v in p.values()):
         raise ShapeError("expected scalar `params` values (use integrate_heavy_top_ensemble for arrays), got arrays")
@@ -354,7 +380,10 @@ def integrate_heavy_top(params: Mapping[str, float], initial: Mapping[str, float
                                         "with method='DOP853'")
         rtol = 1e-10 if rtol is None else check_positive(rtol, "rtol")
         atol = rtol / 100 if atol is None else check_positive(atol, "atol")
-        return _run_dop853(p, w0, q0, t, rtol, atol, estimate_error)
+        return _run_dop853(p, w0, q0, t, rtol, atol, estimate_error, backend)
+    if backend != "auto":
+        raise InvalidInputError(f"expected `backend` only with method='DOP853', got backend={backend!r} "
+                                "with method='splitting'")
     for name, value in (("rtol", rtol), ("atol", atol)):
         if value is not None:
             raise InvalidInputError(f"expected `{name}` only with method='DOP853', got {name}={value!r} "
@@ -421,7 +450,7 @@ def integrate_heavy_top_ensemble(params: Mapping[str, Any], initial: Mapping[str
 
 def _finish(p: dict, t: np.ndarray, omega: np.ndarray, q_raw: np.ndarray, *, method: str, order: int | None,
             n_evaluations: int, n_steps: int | None, wall: float, reference: tuple[np.ndarray, np.ndarray] | None,
-            kind: str, richardson: float = 1.0) -> HeavyTopTrajectory:
+            kind: str, richardson: float = 1.0, backend: str = "python") -> HeavyTopTrajectory:
     quat, norm_drift = _project(q_raw)
     w_err = a_err = None
     if reference is not None:
@@ -434,26 +463,33 @@ def _finish(p: dict, t: np.ndarray, omega: np.ndarray, q_raw: np.ndarray, *, met
                               energy_drift=float(e), p_phi_drift=float(pf), p_psi_drift=float(ps),
                               quaternion_norm_drift=float(norm_drift), n_evaluations=n_evaluations, n_steps=n_steps,
                               omega_error_estimate=w_err, angle_error_estimate=a_err, error_estimate_kind=kind,
-                              wall_time=wall)
+                              wall_time=wall, backend=backend)
 
 
 def _run_dop853(p: dict, w0: np.ndarray, q0: np.ndarray, t: np.ndarray, rtol: float, atol: float,
-                estimate_error: bool) -> HeavyTopTrajectory:
-    rhs = _rhs()
+                estimate_error: bool, backend: str) -> HeavyTopTrajectory:
     args = tuple(_param_values(p))
-
-    def fun(_t: float, y: np.ndarray) -> list:
-        return rhs(*y.tolist(), *args)
-
     y0 = np.concatenate([w0, q0])
+    compiled = None if backend == "scipy" else _compiled_dop853()
+    if compiled is None and backend == "c":
+        raise IntegrationError("expected a C compiler for backend='c' (cc, gcc or clang on PATH, or $CC; "
+                               "MECHDERIVE_NO_C unset), found none; use backend='auto' or 'scipy'")
+    fun = None
+    if compiled is None:
+        rhs = _rhs()
 
-    sol, wall, ref, kind = run_dop853(fun, t, y0, rtol, atol, reference=estimate_error)
+        def fun(_t: float, y: np.ndarray) -> list:
+            return rhs(*y.tolist(), *args)
+
+    sol, wall, ref, kind = run_dop853(fun, t, y0, rtol, atol, reference=estimate_error, compiled=compiled,
+                                      params=args)
     reference = None
     if ref is not None:
         reference = (ref.y[:3].T, ref.y[3:].T)
         kind = f"distance to {kind}"
     return _finish(p, t, sol.y[:3].T.copy(), sol.y[3:].T.copy(), method="DOP853", order=None,
-                   n_evaluations=int(sol.nfev), n_steps=None, wall=wall, reference=reference, kind=kind)
+                   n_evaluations=int(sol.nfev), n_steps=sol.steps, wall=wall, reference=reference, kind=kind,
+                   backend="scipy" if compiled is None else "c")
 
 
 def _splitting_path(p: dict, w0: np.ndarray, q0: np.ndarray, t: np.ndarray, step: float,
