@@ -79,6 +79,20 @@ def test_auto_picks_the_closed_form_and_agrees_with_integration():
     assert exact.report["error_estimate"] < 1e-12
 
 
+def test_integrated_scene_tightens_until_its_estimate_meets_rtol():
+    # DOP853 bounds the error per step; over 6 nutation periods the global error outgrows rtol
+    # unless the planner tightens the integrator's tolerance (reruns at a smaller one).
+    scene = load_scene(HEAVY.replace('quantities = ["u"]', 'quantities = ["theta", "phi", "psi"]'))
+    exact = run_scene(scene)
+    integ = run_scene(dataclasses.replace(scene, method="integrate"))
+    attempts = integ.report["details"]["integrator_attempts"]
+    assert attempts[0]["integrator_rtol"] == 1e-10 and attempts[0]["error_estimate"] > 1e-10  # the first falls short
+    assert integ.report["rtol_met"] and integ.report["error_estimate"] <= 1e-10
+    # the true error (against the closed form, itself ~1e-13) is of the estimate's size: ≤ 10× it
+    err = max(np.max(np.abs(integ.columns[q] - exact.columns[q])) for q in ("theta", "phi", "psi"))
+    assert err <= 10 * integ.report["error_estimate"]
+
+
 def test_free_top_scene_quantities_are_consistent():
     scene = load_builtin("free_top_tumbling")
     r = run_scene(dataclasses.replace(scene, quantities=("omega1", "L1", "energy", "R11", "q0", "theta")))

@@ -23,7 +23,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from ..core import codecache
+from ..core import cbuild, codecache
 from ..core.model import derivation_log, derivation_seconds
 from ..errors import InvalidInputError
 from .schema import Scene
@@ -148,12 +148,40 @@ def _heavy_exact(scene: Scene, t: np.ndarray) -> tuple[dict, dict, Any]:
     return cols, info, top
 
 
+#: Integrator runs per scene at most: the first at the scene's rtol, then tightened.
+_MAX_ATTEMPTS = 3
+
+
+def _integrate_to_rtol(run: Callable[[float], Any], estimate: Callable[[Any], float | None],
+                       rtol: float) -> tuple[Any, list[dict]]:
+    """Run the integrator at the scene's rtol; while the global error estimate exceeds it, rerun tighter.
+
+    DOP853 bounds the error per step; over many steps the global error grows past it (×20 over
+    ten nutation periods is typical).  The global error of a high-order method scales close to
+    linearly with its tolerance, so the next tolerance is the last one times rtol/estimate, with
+    a safety factor 1/2, down to the smallest SciPy accepts (2.3e-14).  With the compiled
+    stepper a rerun costs milliseconds.  Returns the last run and one record per attempt.
+    """
+    from ..solvers.dop853 import SCIPY_MIN_RTOL
+
+    tol, attempts = rtol, []
+    while True:
+        traj = run(tol)
+        est = estimate(traj)
+        attempts.append({"integrator_rtol": tol, "error_estimate": est})
+        if est is None or est <= rtol or len(attempts) >= _MAX_ATTEMPTS or tol <= SCIPY_MIN_RTOL:
+            return traj, attempts
+        tol = max(tol * 0.5 * rtol / est, SCIPY_MIN_RTOL)
+
+
 def _heavy_integrate(scene: Scene, t: np.ndarray) -> tuple[dict, dict, Any]:
     from ..kinematics.rotations import euler_rates
     from ..systems.heavy_top.integrate import integrate_heavy_top
 
-    traj = integrate_heavy_top(scene.parameters, scene.initial, t, method="DOP853", rtol=scene.rtol,
-                               atol=scene.rtol * 1e-3)
+    traj, attempts = _integrate_to_rtol(
+        lambda tol: integrate_heavy_top(scene.parameters, scene.initial, t, method="DOP853", rtol=tol,
+                                        atol=tol * 1e-3),
+        lambda tr: tr.angle_error_estimate, scene.rtol)
     phi, theta, psi = traj.euler_angles.T
     values: dict[str, np.ndarray] = {"phi": phi, "theta": theta, "psi": psi, "u": np.cos(theta), "R": traj.R,
                                      "omega": traj.omega, "apex": traj.R[:, 2, :]}
@@ -173,6 +201,8 @@ def _heavy_integrate(scene: Scene, t: np.ndarray) -> tuple[dict, dict, Any]:
     est = traj.angle_error_estimate
     info = {"error_estimate": None if est is None else float(est),
             "error_estimate_kind": traj.error_estimate_kind,
+            "integrator": f"DOP853 ({'compiled C' if traj.backend == 'c' else 'SciPy solve_ivp'})",
+            "integrator_attempts": attempts,
             "rhs_evaluations": int(traj.n_evaluations),
             "integrator_drift": {"energy": float(np.max(traj.energy_drift)),
                                  "p_phi": float(np.max(traj.p_phi_drift)),
@@ -260,11 +290,15 @@ def _free_integrate(scene: Scene, t: np.ndarray) -> tuple[dict, dict, Any]:
     from ..systems.free_top.integrate import integrate_free_top
 
     moments, w0, R0 = _free_setup(scene)
-    traj = integrate_free_top(moments, w0, t, R0=R0, method="DOP853", rtol=scene.rtol, atol=scene.rtol * 1e-3)
+    traj, attempts = _integrate_to_rtol(
+        lambda tol: integrate_free_top(moments, w0, t, R0=R0, method="DOP853", rtol=tol, atol=tol * 1e-3),
+        lambda tr: None if tr.error_estimate is None else float(np.max(tr.error_estimate)), scene.rtol)
     cols = _free_columns(scene.quantities, lambda: traj.omega, lambda: traj.R,
                          lambda: continuous_euler_angles(euler_angles_from_matrix(traj.R)),
                          lambda: traj.quaternion, moments)
     info = {"error_estimate": float(np.max(traj.error_estimate)) if traj.error_estimate is not None else None,
+            "integrator": f"DOP853 ({'compiled C' if traj.backend == 'c' else 'SciPy solve_ivp'})",
+            "integrator_attempts": attempts,
             "rhs_evaluations": int(traj.n_evaluations)}
     return cols, info, traj
 
@@ -320,6 +354,7 @@ def run_scene(scene: Scene) -> RunResult:
     """Solve ``scene``: derive, compile and evaluate only what its quantities need."""
     start = time.perf_counter()
     derived0, compiled0, seconds0 = len(derivation_log()), len(codecache.compile_log()), derivation_seconds()
+    built0 = len(cbuild.build_log())
     t = np.linspace(0.0, scene.t_end, scene.samples)
     method, note = choose_method(scene)
     system = _SYSTEMS[scene.system]
@@ -327,7 +362,9 @@ def run_scene(scene: Scene) -> RunResult:
     solve_end = time.perf_counter()
     drift = system["drift"](scene, cols, solution, t)
     derived = derivation_log()[derived0:]
-    compiled = codecache.compile_log()[compiled0:]
+    # generated Python (lambdify) and generated C (the compiled steppers), each from memory, disk or new
+    compiled = codecache.compile_log()[compiled0:] + [(f"{name} (C)", "compiled" if how == "built" else how, s)
+                                                      for name, how, s in cbuild.build_log()[built0:]]
     derive_s = derivation_seconds() - seconds0
     compile_s = sum(s for _, how, s in compiled)
     total = time.perf_counter() - start
