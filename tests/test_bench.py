@@ -45,8 +45,8 @@ def test_quick_run_measures_the_four_quick_sections(quick):
 
 def test_heavy_top_table_has_every_family_and_speedups_against_the_baseline(quick):
     heavy = quick["heavy_top"]
-    _check_rows(heavy["rows"], {"closed form", "DOP853", "splitting order 4", "splitting order 6", "baseline",
-                                "baseline (cold)"})
+    _check_rows(heavy["rows"], {"closed form", "DOP853 (C)", "DOP853 (SciPy)", "splitting order 4",
+                                "splitting order 6", "baseline", "baseline (cold)"})
     assert [r["setting"] for r in heavy["rows"] if r["family"] == "baseline"] == ["rtol 1e-08", "rtol 1e-13"]
     for r in heavy["rows"]:
         if r["family"].startswith("baseline"):
@@ -60,8 +60,9 @@ def test_heavy_top_table_has_every_family_and_speedups_against_the_baseline(quic
 
 def test_free_top_table_compares_with_dop853(quick):
     rows = quick["free_top"]["rows"]
-    _check_rows(rows, {"closed form", "DOP853", "splitting order 4", "splitting order 6"})
-    assert all(r["speedup_vs"].lstrip("> ").startswith("DOP853") for r in rows if r["family"] != "DOP853")
+    _check_rows(rows, {"closed form", "DOP853 (C)", "DOP853 (SciPy)", "splitting order 4", "splitting order 6"})
+    assert all(r["speedup_vs"].lstrip("> ").startswith("DOP853 (SciPy)") for r in rows
+               if r["family"] != "DOP853 (SciPy)")
 
 
 def test_ensemble_rows_cover_both_systems_up_to_100_bodies(quick):

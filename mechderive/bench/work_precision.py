@@ -10,7 +10,8 @@ Free top: I = (1, 2, 3), ω(0) = (1, 0.5, 1), 100 polhode periods (679.07 s), 20
 max |ω - ω_closed form| (rad/s).
 
 Rows: the closed form (setup at 40 digits + evaluation, warm process); ``integrate_*`` with
-DOP853 (SciPy's ``solve_ivp`` on the derived (ω, q) right-hand side) and with the splitting (composed
+DOP853 on the derived (ω, q) right-hand side, compiled to C ("DOP853 (C)", the default backend) and
+through SciPy's ``solve_ivp`` ("DOP853 (SciPy)"), and with the splitting (composed
 exact sub-flows, fixed step h = Δt/n, Δt the sample spacing); for the heavy top, the BASELINE user
 path: ``sympy.physics.mechanics`` (``ReferenceFrame`` body-fixed 'ZXZ', ``RigidBody`` with the
 inertia about the pivot, ``LagrangesMethod``) → ``LM.rhs()`` → ``lambdify(cse=True)`` →
@@ -172,7 +173,8 @@ def heavy_top_work_precision(*, quick: bool = False, repeat: int = 3) -> dict:
     ref_error = _heavy_closed_form_error()
     rows = [row("closed form", "setup + θ, φ, ψ", t_closed, ref_error, runs=n_closed, error_vs="30-digit mpmath")]
 
-    integrate_heavy_top(HEAVY_PARAMS, HEAVY_INITIAL, t[:2], estimate_error=False)  # compile once
+    integrate_heavy_top(HEAVY_PARAMS, HEAVY_INITIAL, t[:2], estimate_error=False)  # compile once (C)
+    integrate_heavy_top(HEAVY_PARAMS, HEAVY_INITIAL, t[:2], estimate_error=False, backend="scipy")
     integrate_heavy_top(HEAVY_PARAMS, HEAVY_INITIAL, t[:2], method="splitting", step=dt, estimate_error=False)
 
     def ours(**kw):
@@ -182,10 +184,13 @@ def heavy_top_work_precision(*, quick: bool = False, repeat: int = 3) -> dict:
         (run, angles), seconds, n = median_time(go, repeat=repeat)
         return run, angles, seconds, n
 
-    rtols = (1e-6, 1e-10, 1e-13) if quick else (1e-6, 1e-8, 1e-10, 1e-12, 1e-13)
-    for rt in rtols:
-        run, angles, s, n = ours(rtol=rt)
-        rows.append(row("DOP853", f"rtol {rt:.0e}", s, _angles_error(angles, ref), evals=run.n_evaluations, runs=n))
+    rtols = (1e-6, 1e-10, 1e-13) if quick else (1e-6, 1e-8, 1e-10, 1e-12, 1e-13, 1e-14)
+    scipy_rtols = (1e-10,) if quick else (1e-8, 1e-10, 1e-13)
+    for backend, label, rts in (("c", "DOP853 (C)", rtols), ("scipy", "DOP853 (SciPy)", scipy_rtols)):
+        for rt in rts:
+            run, angles, s, n = ours(rtol=rt, backend=backend)
+            rows.append(row(label, f"rtol {rt:.0e}", s, _angles_error(angles, ref), evals=run.n_evaluations,
+                            runs=n))
     steps = {4: (2,), 6: (2, 8)} if quick else {4: (1, 2, 4, 8), 6: (1, 2, 4, 8, 16)}
     for order, ns in steps.items():
         for k in ns:
@@ -212,7 +217,7 @@ def heavy_top_work_precision(*, quick: bool = False, repeat: int = 3) -> dict:
 
 
 def free_top_work_precision(*, quick: bool = False, repeat: int = 3) -> dict:
-    """The free-top work-precision table; speed-ups are against the DOP853 row of nearest error."""
+    """The free-top work-precision table; speed-ups are against the SciPy DOP853 row of nearest error."""
     from ..systems.free_top.exact import exact_free_top
     from ..systems.free_top.integrate import integrate_free_top
 
@@ -230,23 +235,25 @@ def free_top_work_precision(*, quick: bool = False, repeat: int = 3) -> dict:
     ref_error = _free_closed_form_error()
     rows = [row("closed form", "setup + ω", t_closed, ref_error, runs=n_closed, error_vs="30-digit mpmath")]
     integrate_free_top(FREE_MOMENTS, FREE_OMEGA0, t[:2], estimate_error=False)
+    integrate_free_top(FREE_MOMENTS, FREE_OMEGA0, t[:2], estimate_error=False, backend="scipy")
     integrate_free_top(FREE_MOMENTS, FREE_OMEGA0, t[:2], method="splitting", step=dt, estimate_error=False)
 
     def ours(**kw):
         return median_time(lambda: integrate_free_top(FREE_MOMENTS, FREE_OMEGA0, t, estimate_error=False, **kw),
                            repeat=repeat)
 
-    for rt in ((1e-8, 1e-13) if quick else (1e-8, 1e-10, 1e-12, 1e-13)):
-        run, s, n = ours(rtol=rt, atol=rt / 100)
-        rows.append(row("DOP853", f"rtol {rt:.0e}", s, float(np.max(np.abs(run.omega - ref))),
-                        evals=run.n_evaluations, runs=n))
+    for backend, label in (("scipy", "DOP853 (SciPy)"), ("c", "DOP853 (C)")):
+        for rt in ((1e-8, 1e-13) if quick else (1e-8, 1e-10, 1e-12, 1e-13)):
+            run, s, n = ours(rtol=rt, atol=rt / 100, backend=backend)
+            rows.append(row(label, f"rtol {rt:.0e}", s, float(np.max(np.abs(run.omega - ref))),
+                            evals=run.n_evaluations, runs=n))
     steps = {4: (4,), 6: (4,)} if quick else {4: (4, 8, 16), 6: (2, 4, 8, 16)}
     for order, ns in steps.items():
         for k in ns:
             run, s, n = ours(method="splitting", order=order, step=dt / k)
             rows.append(row(f"splitting order {order}", f"h = Δt/{k} = {dt / k:.3g} s", s,
                             float(np.max(np.abs(run.omega - ref))), evals=run.n_evaluations, runs=n))
-    nearest_error_speedups(rows, "DOP853")
+    nearest_error_speedups(rows, "DOP853 (SciPy)")
     return dict(case=dict(moments=FREE_MOMENTS, omega0=FREE_OMEGA0, periods=periods, t_end=float(T),
                           samples=int(t.size), dt=float(dt)),
                 reference_error=ref_error, rows=rows)

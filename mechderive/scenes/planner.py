@@ -358,13 +358,19 @@ def run_scene(scene: Scene) -> RunResult:
     t = np.linspace(0.0, scene.t_end, scene.samples)
     method, note = choose_method(scene)
     system = _SYSTEMS[scene.system]
+    def compiled_since() -> list[tuple[str, str, float]]:
+        # generated Python (lambdify) and generated C (the compiled steppers), each from memory, disk or new
+        return codecache.compile_log()[compiled0:] + [(f"{name} (C)", "compiled" if how == "built" else how, s)
+                                                      for name, how, s in cbuild.build_log()[built0:]]
+
     cols, info, solution = system[method](scene, t)
     solve_end = time.perf_counter()
+    # what the solve stage itself derived and compiled (the drift check may derive more afterwards)
+    solve_derive_s = derivation_seconds() - seconds0
+    solve_compile_s = sum(s for _, _, s in compiled_since())
     drift = system["drift"](scene, cols, solution, t)
     derived = derivation_log()[derived0:]
-    # generated Python (lambdify) and generated C (the compiled steppers), each from memory, disk or new
-    compiled = codecache.compile_log()[compiled0:] + [(f"{name} (C)", "compiled" if how == "built" else how, s)
-                                                      for name, how, s in cbuild.build_log()[built0:]]
+    compiled = compiled_since()
     derive_s = derivation_seconds() - seconds0
     compile_s = sum(s for _, how, s in compiled)
     total = time.perf_counter() - start
@@ -391,8 +397,9 @@ def run_scene(scene: Scene) -> RunResult:
         "derived": [name for name, _ in derived],
         "compiled": [f"{name} ({how})" for name, how, _ in compiled],
         "timings": {"derive": round(derive_s, 6), "compile": round(compile_s, 6),
-                    "solve": round(max(solve_end - start - derive_s - compile_s, 0.0), 6),
-                    "drift_check": round(total - (solve_end - start), 6)},
+                    "solve": round(max(solve_end - start - solve_derive_s - solve_compile_s, 0.0), 6),
+                    "drift_check": round(max(total - (solve_end - start) - (derive_s - solve_derive_s)
+                                             - (compile_s - solve_compile_s), 0.0), 6)},
         "error_estimate": info.pop("error_estimate", None),
         "drift": drift,
         "rtol": scene.rtol,
