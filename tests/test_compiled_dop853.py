@@ -154,3 +154,22 @@ def test_a_warm_process_neither_derives_nor_compiles(tmp_path):
     assert first.returncode == 0 and second.returncode == 0, first.stderr + second.stderr
     assert first.stdout.split()[:2] == ["c", "['built']"]
     assert second.stdout.split() == ["c", "['disk']", "False", "False"]
+
+
+def test_an_unwritable_cache_folder_builds_privately(tmp_path, monkeypatch):
+    from mechderive.core import codecache
+    from mechderive.solvers.dop853_c import compiled_dop853
+
+    blocked = tmp_path / "cache"
+    blocked.write_text("a file where the cache folder should be")  # mkdir under it fails
+    monkeypatch.setenv("MECHDERIVE_CACHE_DIR", str(blocked))
+    codecache.set_disk_cache(True)
+    try:
+        import sympy as sp
+
+        y = sp.Symbol("y")
+        ode = compiled_dop853("test_private_build", lambda: (sp.Matrix([-y]), [y], []))
+        out, _ = ode.solve(np.array([0.0, 1.0]), np.array([1.0]), [], 1e-12, 1e-14)
+        assert out[-1, 0] == pytest.approx(np.exp(-1.0), rel=1e-11)   # y = e^-t
+    finally:
+        codecache.set_disk_cache(None)

@@ -80,11 +80,11 @@ def compiler() -> str | None:
     return None
 
 
-def _library_path(name: str) -> Path:
+def _library_path(name: str, *, private: bool = False) -> Path:
     cc = compiler() or "none"
     tag = hashlib.sha256(f"{platform.machine()}|{platform.system()}|{cc}|{' '.join(_FLAGS)}".encode()).hexdigest()[:12]
     safe = "".join(c if c.isalnum() or c in "._-" else "_" for c in name)
-    if codecache.disk_cache_enabled():
+    if codecache.disk_cache_enabled() and not private:
         return codecache.cache_dir() / codecache.fingerprint() / "c" / f"{safe}-{tag}.so"
     if not _TMP:
         _TMP.append(tempfile.mkdtemp(prefix="mechderive-c-"))
@@ -129,7 +129,11 @@ def load_library(name: str, build_source: Callable[[], str]) -> ctypes.CDLL:
             before = derivation_seconds()
             source = build_source()
             start += derivation_seconds() - before  # the derivation is reported as such, not as compiling
-            _build(source, path)
+            try:
+                _build(source, path)
+            except OSError:  # a read-only or full cache folder: build privately for this process
+                path = _library_path(name, private=True)
+                _build(source, path)
             how = "built"
         lib = ctypes.CDLL(str(path))
         _MEMORY[name] = lib
