@@ -14,10 +14,11 @@ Convention of section 3.7: r_i = R r̃_i, R acting on column vectors (the active
 rotation, R(3.1) = R(3.7)ᵀ), Ω = R⁻¹Ṙ, hat(v)_ab = ε_abc v_c.
 """
 
+from typing import Any
+
 from .cat import falling_cat, falling_cat_motion, flip_bend
 from .connection import ShapeConnection
 from .holonomy import Holonomy, ShapeLoop, net_rotation, rotation_along
-from .model import DeformableBody, centred_positions
 
 __all__ = [
     "DeformableBody",
@@ -31,3 +32,13 @@ __all__ = [
     "net_rotation",
     "rotation_along",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    # The symbolic model imports SymPy: loaded on first use, so that a falling cat whose compiled
+    # functions are in the disk cache runs without SymPy (PEP 562).
+    if name in ("DeformableBody", "centred_positions"):
+        from . import model
+
+        return getattr(model, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

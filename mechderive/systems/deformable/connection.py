@@ -1,7 +1,9 @@
 """Numbers from a :class:`~.model.DeformableBody`: compiled Ĩ, Ω_A (3.87), Ω (3.92), F_AB (3.102).
 
 Every function here is compiled from the model's derived expressions by
-:meth:`SymbolicModel.compile` (lambdify with cse, cached); nothing is re-derived.
+:meth:`SymbolicModel.compile` (lambdify with cse, cached in memory) or, for a connection made by
+:meth:`ShapeConnection.cached`, by :func:`~mechderive.core.compile.compile_cached` (the generated
+code kept on disk: a warm process neither derives nor imports SymPy); nothing is re-derived.
 Arrays broadcast over leading dimensions: a shape ``x`` has shape (..., n), a shape
 velocity the same.  Vectors of so(3) are in the hat convention of section 3.7's
 package (Ω = hat(v), hat(v)_ab = ε_abc v_c), ready for
@@ -18,14 +20,16 @@ array([[0., 0., 1.]])
 
 from __future__ import annotations
 
-from typing import Any, Mapping
+import sys
+from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
-import sympy as sp
 
 from ...core.validate import as_finite_array
 from ...errors import InvalidInputError, ShapeError
-from .derivation import vee
+
+# SymPy is imported only where a body is derived or compiled (inside the builders below): a
+# connection loaded from the disk cache (ShapeConnection.cached) never imports it.
 
 __all__ = ["ShapeConnection"]
 
@@ -33,21 +37,49 @@ __all__ = ["ShapeConnection"]
 class ShapeConnection:
     """The compiled numeric side of a :class:`~.model.DeformableBody` at fixed parameter values.
 
+    Built by :meth:`DeformableBody.numeric` (compiled in memory from the given body), or by
+    :meth:`ShapeConnection.cached` (compiled functions kept in the disk cache under a name, the body
+    derived only on a miss).
+
     Attributes
     ----------
     body : DeformableBody
+        The symbolic body (for a cached connection: derived on first access).
     values : dict[str, float]
         The parameter values, by name.
     masses : ndarray, shape (N,)
     """
 
     def __init__(self, body: Any, values: Mapping[Any, float] | None = None) -> None:
-        self.body = body
+        self._body = body
+        self._init([p.name for p in body.parameters], body.dimension, values, cache_name=None, build_body=None)
+
+    @classmethod
+    def cached(cls, name: str, build_body: Callable[[], Any], *, dimension: int, parameters: Sequence[str],
+               values: Mapping[Any, float] | None = None) -> "ShapeConnection":
+        """The connection of the body ``build_body()`` with its compiled functions in the disk cache.
+
+        Each function is :func:`~mechderive.core.compile.compile_cached` under ``"<name>.<quantity>"``
+        (e.g. ``"deformable.cat.connection"``) with the body's parameters as arguments, so ``name``
+        must identify the body (not its parameter values).  ``build_body`` — deriving with SymPy —
+        runs only when a function is in neither memory nor the disk cache; ``dimension`` and the
+        parameter names (in the order of the body's parameters) are given so that a warm process
+        needs no body at all.
+        """
+        self = cls.__new__(cls)
+        self._body = None
+        self._init(list(parameters), int(dimension), values, cache_name=name, build_body=build_body)
+        return self
+
+    def _init(self, names: list[str], dimension: int, values: Mapping[Any, float] | None, *,
+              cache_name: str | None, build_body: Callable[[], Any] | None) -> None:
+        self._cache_name, self._build_body, self._dimension = cache_name, build_body, dimension
+        self._functions: dict[str, Callable[..., np.ndarray]] = {}
         given = dict(values or {})
-        names = [p.name for p in body.parameters]
         by_name: dict[str, float] = {}
+        sympy = sys.modules.get("sympy")  # a SymPy symbol as a key implies SymPy is imported
         for key, value in given.items():
-            name = key.name if isinstance(key, sp.Symbol) else key
+            name = key.name if sympy is not None and isinstance(key, sympy.Symbol) else key
             if not isinstance(name, str) or name not in names:
                 raise InvalidInputError(f"unknown parameter {key!r}: expected one of {', '.join(names) or '(none)'}")
             if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
@@ -58,17 +90,27 @@ class ShapeConnection:
             raise InvalidInputError(f"missing parameter {missing[0]!r}: expected values for all of {', '.join(names)}")
         self.values = by_name
         self._params = [by_name[n] for n in names]
-        args = [*body.coordinates, *body.parameters]
-        self.masses = np.array(body.compile("masses", sp.Matrix(body.masses), list(body.parameters))(*self._params),
+
+        def masses(body: Any) -> Any:
+            import sympy as sp
+
+            return sp.Matrix(body.masses)
+        self.masses = np.array(self._function("masses", masses, coordinates=False)(*self._params),
                                dtype=float).reshape(-1)
         if np.any(self.masses <= 0):
             raise InvalidInputError(f"expected every mass > 0, got {self.masses.min():g}")
-        self._args = args
+
+    @property
+    def body(self) -> Any:
+        """The symbolic :class:`~.model.DeformableBody` (for a cached connection: derived now if not yet)."""
+        if self._body is None:
+            self._body = self._build_body()
+        return self._body
 
     @property
     def dimension(self) -> int:
         """n, the number of shape coordinates."""
-        return self.body.dimension
+        return self._dimension
 
     def _shape(self, x: Any, name: str = "x") -> list[np.ndarray]:
         arr = as_finite_array(x, name)
@@ -76,17 +118,47 @@ class ShapeConnection:
             raise ShapeError(f"expected `{name}` to have shape (..., {self.dimension}), got {arr.shape}")
         return [arr[..., A] for A in range(self.dimension)]
 
-    def _call(self, name: str, exprs: Any, extra: tuple = (), *values: np.ndarray) -> np.ndarray:
-        f = self.body.compile(name, exprs, [*self.body.coordinates, *extra, *self.body.parameters])
-        return f(*values, *self._params)
+    def _function(self, name: str, exprs: Callable[[Any], Any], *, coordinates: bool = True,
+                  velocities: bool = False) -> Callable[..., np.ndarray]:
+        """The compiled ``exprs(body)`` with arguments (x^A, [ẋ^A,] parameters), or (parameters) alone.
+
+        ``exprs`` is called — deriving — only when the function is compiled, not when it is
+        loaded from the disk cache.
+        """
+        f = self._functions.get(name)
+        if f is not None:
+            return f
+
+        def build() -> tuple[list, Any]:
+            body = self.body
+            args = [*(body.coordinates if coordinates else ()), *(body.velocities if velocities else ()),
+                    *body.parameters]
+            return args, exprs(body)
+
+        if self._cache_name is None:
+            args, e = build()
+            f = self.body.compile(name, e, args)
+        else:
+            from ...core.compile import compile_cached
+
+            f = compile_cached(f"{self._cache_name}.{name}", build)
+        self._functions[name] = f
+        return f
+
+    def _call(self, name: str, exprs: Callable[[Any], Any], *values: np.ndarray, velocities: bool = False) -> np.ndarray:
+        return self._function(name, exprs, velocities=velocities)(*values, *self._params)
 
     def positions(self, x: Any) -> np.ndarray:
         """r̃_i(x), shape (..., N, 3)."""
-        return self._call("positions", sp.Matrix([list(r) for r in self.body.positions]), (), *self._shape(x))
+        def exprs(body: Any) -> Any:
+            import sympy as sp
+
+            return sp.Matrix([list(r) for r in body.positions])
+        return self._call("positions", exprs, *self._shape(x))
 
     def inertia(self, x: Any) -> np.ndarray:
         """Ĩ(x) (3.93), shape (..., 3, 3)."""
-        return self._call("inertia_tensor", self.body.inertia_tensor, (), *self._shape(x))
+        return self._call("inertia_tensor", lambda body: body.inertia_tensor, *self._shape(x))
 
     def _check_invertible(self, x: Any) -> None:
         det = np.linalg.det(self.inertia(x))
@@ -97,7 +169,7 @@ class ShapeConnection:
     def connection(self, x: Any) -> np.ndarray:
         """The vectors of Ω_A(x) (3.87), shape (..., n, 3): Ω_A = hat(row A)."""
         with np.errstate(divide="ignore", invalid="ignore"):  # a singular Ĩ is reported below
-            out = self._call("connection", self.body.connection_vectors, (), *self._shape(x))
+            out = self._call("connection", lambda body: body.connection_vectors, *self._shape(x))
         if not np.all(np.isfinite(out)):
             self._check_invertible(x)
         return out
@@ -105,15 +177,18 @@ class ShapeConnection:
     def angular_velocity(self, x: Any, xdot: Any) -> np.ndarray:
         """v with Ω = hat(v) = Ω_A ẋ^A (3.87), (3.92), shape (...); x and ẋ broadcast."""
         xs, vs = self._shape(x), self._shape(xdot, "xdot")
-        out = self._call("angular_velocity", self.body.angular_velocity_vector, tuple(self.body.velocities), *xs, *vs)
+        out = self._call("angular_velocity", lambda body: body.angular_velocity_vector, *xs, *vs, velocities=True)
         out = np.asarray(out)
         return out[..., 0] if out.shape[-1:] == (1,) else out
 
     def field_strength(self, x: Any) -> np.ndarray:
         """The vectors of F_AB(x) (the corrected (3.103)), shape (..., n, n, 3), antisymmetric in A, B."""
-        return self._call("field_strength", self.body.field_strength_vectors, (), *self._shape(x))
+        return self._call("field_strength", lambda body: body.field_strength_vectors, *self._shape(x))
 
     def connection_derivatives(self, x: Any) -> np.ndarray:
         """The vectors of ∂Ω_A/∂x^B, shape (..., n, n, 3) indexed [A, B]."""
-        exprs = [[list(vee(d)) for d in row] for row in self.body.connection_derivatives]
-        return self._call("connection_derivatives", exprs, (), *self._shape(x))
+        def exprs(body: Any) -> Any:
+            from .derivation import vee
+
+            return [[list(vee(d)) for d in row] for row in body.connection_derivatives]
+        return self._call("connection_derivatives", exprs, *self._shape(x))

@@ -32,15 +32,17 @@ True
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Callable, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Sequence
 
 import numpy as np
-import sympy as sp
 
 from ...core.compile import compile_expressions
 from ...core.validate import as_finite_array
 from ...errors import InvalidInputError, ShapeError
 from ...kinematics.path_ordered import path_ordered_exponential
+
+if TYPE_CHECKING:  # SymPy is imported at run time only to build loops from expressions
+    import sympy
 
 __all__ = ["ShapeLoop", "Holonomy", "net_rotation", "rotation_along"]
 
@@ -105,13 +107,16 @@ class ShapeLoop:
                    (float(ts[0]), float(ts[-1])), xs.shape[1])
 
     @classmethod
-    def from_expressions(cls, expressions: Sequence[Any], parameter: sp.Symbol, span: Any) -> "ShapeLoop":
+    def from_expressions(cls, expressions: Sequence[Any], parameter: sympy.Symbol, span: Any) -> "ShapeLoop":
         """From SymPy expressions x^A(s) of the loop parameter ``s`` (time, s); ẋ^A = dx^A/ds by SymPy.
 
+        >>> import sympy as sp
         >>> s = sp.Symbol("s", real=True)
         >>> ShapeLoop.from_expressions([s**2, sp.sin(s)], s, (0, 2 * sp.pi)).velocity(np.array([1.0]))
         array([[2.        , 0.54030231]])
         """
+        import sympy as sp  # only here: loops from functions or samples need no SymPy
+
         if not isinstance(parameter, sp.Symbol):
             raise InvalidInputError(f"expected the loop parameter as a SymPy symbol, got {type(parameter).__name__}")
         exprs = list(expressions)
