@@ -178,3 +178,18 @@ def test_closed_form_agrees_with_the_euler_lagrange_equations_integrated():
     np.testing.assert_allclose(sol.y[1], top.theta(t), atol=1e-9)
     np.testing.assert_allclose(sol.y[0], top.phi(t), atol=1e-9)
     np.testing.assert_allclose(sol.y[2], top.psi(t), atol=1e-9)
+
+
+def test_omega_at_the_start_next_to_the_bottom_is_the_initial_state():
+    # Regression: ω was formed with θ̇ = -u̇/sin θ and sin θ from a θ rounded next to π, which loses
+    # ulp(π)/(π - θ) relative: ω1(0) came out 1.2e-9 off at θ0 = π - 1e-8.  The reference is (3.58)
+    # at the initial state, by hand: ω = (φ̇ sin θ sin ψ + θ̇ cos ψ, φ̇ sin θ cos ψ - θ̇ sin ψ, φ̇ cos θ + ψ̇).
+    init = dict(theta=np.pi - 1e-8, phi=0.2, psi=-0.4, theta_dot=0.3, phi_dot=0.0, psi_dot=3.0)
+    top = exact_heavy_top(BASELINE, init)
+    with mpmath.workdps(30):
+        th, ps = mpmath.mpf(init["theta"]), mpmath.mpf(init["psi"])
+        phd, thd, psd = (mpmath.mpf(init[k]) for k in ("phi_dot", "theta_dot", "psi_dot"))
+        want = [float(phd * mpmath.sin(th) * mpmath.sin(ps) + thd * mpmath.cos(ps)),
+                float(phd * mpmath.sin(th) * mpmath.cos(ps) - thd * mpmath.sin(ps)), float(phd * mpmath.cos(th) + psd)]
+    # 1e-13 relative to |ω|: the closed form's claimed accuracy at one point
+    np.testing.assert_allclose(top.evaluate([0.0], ["omega"])["omega"][0], want, rtol=0, atol=1e-13 * 3.1)

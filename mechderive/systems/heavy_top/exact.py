@@ -103,6 +103,35 @@ def _angle_functions():
             for name, which in (("phi", "precession_fractions"), ("psi", "spin_fractions"))}
 
 
+@functools.cache
+def _omega_half_angles():
+    """Body ω (3.58) as a function of (σ, δ, s, c, σ̇, δ̇, θ̇), derived from the chapter's form.
+
+    σ = (φ + ψ)/2, δ = (φ - ψ)/2 and (s, c) ∝ (sin θ/2, cos θ/2) with any common factor, so that
+    sin θ = 2sc/(s² + c²), cos θ = (c² - s²)/(s² + c²).  This is what R is built from: near the
+    pole φ̇ and ψ̇ grow like 1/(1 - n₊ sn²) and φ̇ cos θ + ψ̇ cancels (near the bottom φ̇ sin θ
+    from a θ rounded next to π loses digits); here ω3 = 2(σ̇ c² - δ̇ s²)/(s² + c²), where the
+    large part of δ̇ (σ̇) comes multiplied by s² (c²), with nothing cancelling.
+    """
+    def build():
+        import sympy as sp
+
+        from ...core.symbols import state_symbol
+        from ...kinematics import euler
+
+        sig, dlt, s, c, sd, dd, thd = sp.symbols("sigma delta s c sigma_dot delta_dot theta_dot", real=True)
+        th = state_symbol("theta")
+        w = euler.model().state_angular_velocity_body.subs({
+            state_symbol("phi"): sig + dlt, state_symbol("psi"): sig - dlt, state_symbol("phi_dot"): sd + dd,
+            state_symbol("psi_dot"): sd - dd, state_symbol("theta_dot"): thd})
+        w = w.subs({sp.sin(th): 2 * s * c / (s**2 + c**2), sp.cos(th): (c**2 - s**2) / (s**2 + c**2)})
+        if th in w.free_symbols:
+            raise DerivationError(f"expected ω (3.58) in sin θ and cos θ only, got {w}")
+        return [sig, dlt, s, c, sd, dd, thd], w.applyfunc(lambda e: sp.factor(sp.together(e)))
+
+    return cached_lambdify("heavy_top.omega_half_angles", build, module="numpy")[0]
+
+
 #: Up to this many nutation periods the advance per period in double precision is exact enough
 #: (j·Δ errs by j·ulp(Δ) ≲ 1e-13 rad); beyond, its 40-digit value is used.
 _FEW_PERIODS = 64
@@ -273,15 +302,23 @@ class _Pass:
     def half_angle(self, a: _Angle, b: _Angle, sign: int) -> np.ndarray:
         """(a ± b)/2, reduced modulo 2π in double-double; terms with a common characteristic combined
         first, so that a term cancelling in the sum (n₊ in φ + ψ, n₋ in φ - ψ) is never evaluated."""
-        sol = self.sol
-        j, r = self.phase()
+        return self._get(f"half({a.name},{b.name},{sign})", lambda: self._half_angle(a, b, sign))
+
+    @staticmethod
+    def _combined(a: _Angle, b: _Angle, sign: int) -> tuple[float, dict, dict]:
+        """c0/κ and the Π coefficients of (a ± b)/2 by characteristic (and Π(n; am v0) per n)."""
         coeffs: dict[float, float] = {}
         pi0s: dict[float, float] = {}
         for spec, w in ((a, 0.5), (b, 0.5 * sign)):
             for c, n, pi0 in spec.terms:
                 coeffs[n] = coeffs.get(n, 0.0) + w * c
                 pi0s[n] = pi0
-        c0 = 0.5 * (a.c0_over_kappa + sign * b.c0_over_kappa)
+        return 0.5 * (a.c0_over_kappa + sign * b.c0_over_kappa), coeffs, pi0s
+
+    def _half_angle(self, a: _Angle, b: _Angle, sign: int) -> np.ndarray:
+        sol = self.sol
+        j, r = self.phase()
+        c0, coeffs, pi0s = self._combined(a, b, sign)
         value = 0.5 * (a.start + sign * b.start) + c0 * (r - sol._v0.hi - sol._v0.lo)
         self.pis([n for n, c in coeffs.items() if c != 0.0])
         for n, c in coeffs.items():
@@ -297,15 +334,34 @@ class _Pass:
         return value
 
     def rate(self, spec: _Angle) -> np.ndarray:
+        """φ̇ or ψ̇: the derivative of :meth:`angle`, κ(c0/κ + Σ (c_i/κ)/(1 - n_i sn²))."""
         sol = self.sol
         if sol.kind == "steady":
             return np.full(self.t.shape, spec.rate)
-        sn = self.jacobi()[0]
         kappa = sol._kappa.hi + sol._kappa.lo
         value = np.full(self.t.shape, spec.c0_over_kappa * kappa)
         for c, n, _ in spec.terms:
-            value = value + c * kappa / (1 - n * sn**2)
+            value = value + c * self._kappa_over_q(n)
         return value
+
+    def half_rate(self, a: _Angle, b: _Angle, sign: int) -> np.ndarray:
+        """d/dt of :meth:`half_angle`: its combined terms, so (φ̇ + ψ̇)/2 has no n₊ term, (φ̇ - ψ̇)/2 no n₋."""
+        c0, coeffs, _ = self._combined(a, b, sign)
+        value = np.full(self.t.shape, c0 * (self.sol._kappa.hi + self.sol._kappa.lo))
+        for n, c in coeffs.items():
+            if c != 0.0:
+                value = value + c * self._kappa_over_q(n)
+        return value
+
+    def _kappa_over_q(self, n: float) -> np.ndarray:
+        """κ/(1 - n sn²), the rate of Π(n; am v | m) in t."""
+        def make():
+            sn, cn, _ = self.jacobi()
+            n1 = self.sol._mp.get("one_minus_n", {}).get(n, 1.0)
+            # near the pole 1 - n₊ sn² = cn² + (1 - n₊) sn² keeps the digits 1 - float(n₊) has lost
+            q = cn**2 + n1 * sn**2 if n1 < 1e-3 else 1 - n * sn**2
+            return (self.sol._kappa.hi + self.sol._kappa.lo) / q
+        return self._get(f"kappa/q({n!r})", make)
 
 
 #: The quantities :meth:`HeavyTopSolution.evaluate` knows (each an array over t; R is (..., 3, 3),
@@ -438,13 +494,17 @@ class HeavyTopSolution:
             return np.stack([np.sin(th) * np.sin(ph), -np.sin(th) * np.cos(ph), np.cos(th)], axis=-1)
         if q == "omega":
             if steady:
-                theta, theta_dot = self._quantity(ps, "theta"), np.zeros(t.shape)
-            else:
-                # the signed θ (continuous through exact passages) with φ, ψ without the π jumps
-                theta, theta_dot = self._quantity(ps, "_theta_signed"), self._signed_theta_dot(ps)
-            return angular_velocity_body(ps.angle(self._angles["phi"], reduced=True), theta,
-                                         ps.angle(self._angles["psi"], reduced=True), self._quantity(ps, "phi_dot"),
-                                         theta_dot, self._quantity(ps, "psi_dot"))
+                return angular_velocity_body(ps.angle(self._angles["phi"], reduced=True), self._theta_const,
+                                             ps.angle(self._angles["psi"], reduced=True),
+                                             self._quantity(ps, "phi_dot"), 0.0, self._quantity(ps, "psi_dot"))
+            # from what R is built of: the half sums/differences and the signed (sin θ/2, cos θ/2),
+            # continuous through exact passages (φ, ψ without their π jumps)
+            phi, psi = self._angles["phi"], self._angles["psi"]
+            s, c = ps.half_theta()
+            w = _omega_half_angles()(ps.half_angle(phi, psi, +1), ps.half_angle(phi, psi, -1), s, c,
+                                     ps.half_rate(phi, psi, +1), ps.half_rate(phi, psi, -1),
+                                     self._signed_theta_dot(ps))
+            return np.stack(np.broadcast_arrays(*w), axis=-1)
         raise InvalidInputError(f"unknown quantity {q!r}: expected one of {', '.join(QUANTITIES)}")
 
     def _signed_theta_dot(self, ps: _Pass) -> np.ndarray:
@@ -463,8 +523,10 @@ class HeavyTopSolution:
         if self._one_plus_u1 == 0.0:
             return -self._mp["bottom_sign"] * k * cn * dn / np.sin(theta / 2)
         u_dot = self._quantity(ps, "u_dot")
+        s, c = ps.half_theta()
+        # sin θ = 2sc/(s² + c²): np.sin of a θ rounded next to π would lose ulp(π)/(π - θ) relative
         with np.errstate(divide="ignore", invalid="ignore"):
-            return -u_dot / np.sin(theta)
+            return -u_dot * (s * s + c * c) / (2 * s * c)
 
     def _rotation(self, ps: _Pass) -> np.ndarray:
         """R from the quaternion of Rᵀ built on (φ + ψ)/2 and (φ - ψ)/2 (see conversions.euler_to_quaternion).
