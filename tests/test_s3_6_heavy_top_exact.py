@@ -193,3 +193,47 @@ def test_omega_at_the_start_next_to_the_bottom_is_the_initial_state():
                 float(phd * mpmath.sin(th) * mpmath.cos(ps) - thd * mpmath.sin(ps)), float(phd * mpmath.cos(th) + psd)]
     # 1e-13 relative to |ω|: the closed form's claimed accuracy at one point
     np.testing.assert_allclose(top.evaluate([0.0], ["omega"])["omega"][0], want, rtol=0, atol=1e-13 * 3.1)
+
+
+# --- passages near the pole and the bottom --------------------------------------------------------------
+
+# θ0 next to the pole (bottom), moving away: the apex comes back within 5e-6 .. 5e-14 rad of the pole
+# (~1e-14 .. 1e-16 of the bottom) once per nutation period, where φ and ψ each turn by ~π in a time
+# ~(1 - n₊)^(1/2) (resp. (-n₋)^(-1/2)); R, the apex and ω stay smooth there.
+NEAR_PASSAGES = {
+    "pole-1e-3": dict(theta=1e-3, theta_dot=0.5, psi_dot=10.0),
+    "pole-1e-7": dict(theta=1e-7, theta_dot=0.5, psi_dot=10.0),  # n₊ = 1 - 5e-26 rounds to 1
+    "bottom-1e-7": dict(theta=np.pi - 1e-7, theta_dot=0.3, psi_dot=3.0),
+    "bottom-1e-8": dict(theta=np.pi - 1e-8, theta_dot=0.3, psi_dot=3.0),
+}
+
+
+def _hand_roots(init: dict, dps: int = 120) -> list:
+    """The roots u1 ≤ u2 ≤ u3 of f(u) (3.73) for BASELINE, typed in by hand from (3.65)–(3.72), (3.78)."""
+    with mpmath.workdps(dps):
+        I1, I3, mgl = mpmath.mpf(1), mpmath.mpf("0.5"), mpmath.mpf(BASELINE["M"]) * 10 * 1
+        th, thd = mpmath.mpf(init["theta"]), mpmath.mpf(init["theta_dot"])
+        phd, psd = mpmath.mpf(init.get("phi_dot", 0.0)), mpmath.mpf(init["psi_dot"])
+        w3 = psd + phd * mpmath.cos(th)
+        a = I3 * w3 / I1
+        b = (I1 * phd * mpmath.sin(th) ** 2 + I3 * w3 * mpmath.cos(th)) / I1
+        alpha = thd**2 + phd**2 * mpmath.sin(th) ** 2 + 2 * mgl * mpmath.cos(th) / I1
+        beta = 2 * mgl / I1
+        # f(u) = β u³ - (α + a²) u² + (2ab - β) u + (α - b²)
+        roots = mpmath.polyroots([beta, -(alpha + a * a), 2 * a * b - beta, alpha - b * b], maxsteps=400,
+                                 extraprec=4 * dps)
+        return sorted(mpmath.re(r) for r in roots)
+
+
+@pytest.mark.parametrize("name", list(NEAR_PASSAGES))
+def test_conditioning_near_a_passage_has_full_relative_accuracy(name):
+    # Regression: at 40 digits 1 + u1 = 3e-32 came out 2e-9 off relative (R 7e-9 off); the setup now
+    # adds the digits 1 ∓ u has lost.  conditioning = max((1 - u1)/(1 - u2), (1 + u2)/(1 + u1)).
+    top = exact_heavy_top(BASELINE, NEAR_PASSAGES[name])
+    with mpmath.workdps(120):
+        u1, u2, _ = _hand_roots(NEAR_PASSAGES[name])
+        want = float(max((1 - u1) / (1 - u2), (1 + u2) / (1 + u1)))
+    assert top.conditioning > 1e9  # the case is what it says: a near passage
+    # 1e-13: both are correctly rounded 30+-digit values, up to the float inputs' own rounding
+    assert top.conditioning == pytest.approx(want, rel=1e-13)
+

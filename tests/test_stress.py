@@ -27,14 +27,10 @@ NEAR_POLE_R = ("heavy-top closed form: R, apex, ω err ~3e-8 when the apex passe
                "(Π(n₊) with n₊ → 1 and the 40-digit 1 - n₊ still loses accuracy somewhere in the evaluation)")
 POLE_N_ONE = ("heavy-top closed form: evaluate(phi/psi/R/apex/omega) raises 'expected `n` != 1' when the apex "
               "passes within ~1e-8 rad of the pole (n₊ rounds to 1 in double precision)")
-HANGING_PASS = ("heavy-top closed form: R errs (2e-12 at θmax = π - 1e-7, 7e-9 at π - 1e-8) when the apex passes "
-                "near the bottom (Π(n₋) with n₋ → -∞)")
 
 KNOWN_BUGS = {
     "pole-pass-1e-3": NEAR_POLE_R,
     "pole-pass-1e-7": POLE_N_ONE,
-    "pole-hanging-pass-1e-7": HANGING_PASS,
-    "pole-hanging-pass-1e-8": HANGING_PASS,
 }
 
 

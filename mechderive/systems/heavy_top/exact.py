@@ -409,13 +409,13 @@ class HeavyTopSolution:
 
     @functools.cached_property
     def _angles(self) -> dict[str, _Angle]:
-        with mpmath.workdps(_DPS):
+        with mpmath.workdps(self._mp.get("dps", _DPS)):
             return _angle_setup(self)
 
     @functools.cached_property
     def _per_period_precise(self) -> dict[str, DD]:
         """The advance of φ and ψ per nutation period at 40 digits (for evaluation far out)."""
-        with mpmath.workdps(_DPS):
+        with mpmath.workdps(self._mp.get("dps", _DPS)):
             return _precise_advance(self)
 
     # --- the phase ----------------------------------------------------------------------------
@@ -646,7 +646,7 @@ def _real_roots(coeffs: list, known: mpmath.mpf | None = None) -> list:
         b2 = c2 + c3 * known
         b1 = c1 + b2 * known
         disc = b2 * b2 - 4 * c3 * b1
-        if disc < 0 and disc > -mpmath.mpf(10) ** (-_DPS + 5) * (b2 * b2 + abs(4 * c3 * b1)):
+        if disc < 0 and disc > -mpmath.mpf(10) ** (-mpmath.mp.dps + 5) * (b2 * b2 + abs(4 * c3 * b1)):
             disc = mpmath.mpf(0)  # a double root, up to the 40-digit rounding
         if disc >= 0:
             sq = mpmath.sqrt(disc)
@@ -666,16 +666,22 @@ def _real_roots(coeffs: list, known: mpmath.mpf | None = None) -> list:
                     fx = ((c3 * x + c2) * x + c1) * x + c0
                     step = fx / ((3 * c3 * x + 2 * c2) * x + c1)
                     x -= step
-                    if abs(step) <= mpmath.mpf(10) ** (-_DPS + 2) * (1 + abs(x)):
+                    if abs(step) <= mpmath.mpf(10) ** (-mpmath.mp.dps + 2) * (1 + abs(x)):
                         break
                 roots.append(x)
             return sorted(roots)
-    roots = mpmath.polyroots(coeffs, maxsteps=200, extraprec=4 * _DPS)
-    tiny = mpmath.mpf(10) ** (-_DPS // 2)
+    roots = mpmath.polyroots(coeffs, maxsteps=200, extraprec=4 * mpmath.mp.dps)
+    tiny = mpmath.mpf(10) ** (-mpmath.mp.dps // 2)
     real = sorted(mpmath.re(r) for r in roots if abs(mpmath.im(r)) <= tiny * (1 + abs(r)))
     if len(real) != 3:
         raise DerivationError(f"expected three real roots of f(u), got {roots}")
     return real
+
+
+#: Below this 1 - u2 (or 1 + u1) the 40-digit roots would leave fewer than 30 of its digits.
+_NEAR_PASSAGE = 1e-10
+#: No real input needs this many: b ∓ a resolved at d digits makes 1 ∓ u ≳ 10^(-2d).
+_MAX_DPS = 1000
 
 
 def _setup(params: dict, init: dict) -> HeavyTopSolution:
@@ -696,8 +702,31 @@ def _setup(params: dict, init: dict) -> HeavyTopSolution:
     # u0 lies in [u1, u2] up to the roots' own accuracy (40 digits); snap it in, and keep the
     # turning points in [-1, 1] (a root at ±1 can come out as ±(1 + 4e-40)).
     u_2, u_1 = min(max(u_2, u0), mp(1)), max(min(u_1, u0), mp(-1))
+    # A near pole (bottom) passage: 1 - u2 (1 + u1) is tiny, and the roots, accurate to 10^-dps
+    # absolutely, keep only dps + log10(1 ∓ u) of its digits.  But n± (3.74)-(3.75) and with them
+    # the turn of φ and ψ by ~π at the passage depend on its *relative* value (at 40 digits,
+    # 1 + u1 = 3e-32 came out 2e-9 off relative, and R 7e-9 off).  The inputs are exact binary
+    # numbers: redo the setup with as many more digits as 1 ∓ u has leading zeros.  f(±1) = -(b ∓ a)²
+    # (3.73): the apex reaches the pole (bottom) only if b = a (b = -a); a root at ±1 with b ∓ a ≠ 0
+    # means the working digits could not resolve 1 ∓ u (~(b ∓ a)²) at all: double them first.
+    gaps = ((1 - u_2, b - a), (1 + u_1, b + a))
+    if any(g == 0 and d != 0 for g, d in gaps):
+        if mpmath.mp.dps >= _MAX_DPS:
+            raise DerivationError(f"expected 1 - u2 and 1 + u1 resolved within {_MAX_DPS} digits, got a root at "
+                                  f"±1 with b ∓ a = {mpmath.nstr(b - a, 3)}, {mpmath.nstr(b + a, 3)}")
+        with mpmath.workdps(2 * mpmath.mp.dps):
+            return _setup(params, init)
+    near = [g for g, _ in gaps if g > 0]
+    if near and min(near) < _NEAR_PASSAGE:
+        # (a gap below 10^-dps is only an upper bound: the next pass measures it again)
+        needed = _DPS + int(mpmath.ceil(-mpmath.log10(min(near))))
+        if needed > mpmath.mp.dps:
+            if needed > _MAX_DPS:
+                raise DerivationError(f"expected 1 ∓ u resolved within {_MAX_DPS} digits, got {min(near)}")
+            with mpmath.workdps(needed):
+                return _setup(params, init)
     amp = u_2 - u_1
-    scale = mp(10) ** (-_DPS + 8)
+    scale = mp(10) ** (-mpmath.mp.dps + 8)
     roots_f = (float(u_1), float(u_2), float(u_3))
     if amp <= scale or (mpmath.sin(th0) == 0 and S[1] == 0):
         return HeavyTopSolution(
@@ -729,7 +758,7 @@ def _setup(params: dict, init: dict) -> HeavyTopSolution:
                  # sn v0 = sin A0, cn v0 = cos A0 exactly (v0 = F(A0|m), DLMF 22.16.1)
                  pole_sign=_passage_sign(mpmath.cos(A0), -mpmath.sin(A0), S[1]),
                  bottom_sign=_passage_sign(mpmath.sin(A0), mpmath.cos(A0), -S[1]),
-                 scale=scale), **common)
+                 scale=scale, dps=mpmath.mp.dps), **common)
 
 
 def _passage_sign(value, slope, theta_dot) -> float:
