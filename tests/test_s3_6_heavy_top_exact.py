@@ -237,3 +237,38 @@ def test_conditioning_near_a_passage_has_full_relative_accuracy(name):
     # 1e-13: both are correctly rounded 30+-digit values, up to the float inputs' own rounding
     assert top.conditioning == pytest.approx(want, rel=1e-13)
 
+
+def _passage_time(top, t_lo: float, t_hi: float) -> float:
+    """The time of the extremum of u in [t_lo, t_hi] (a sign change of u̇), by bisection: the window only."""
+    f = lambda t: float(top.evaluate([t], ["u_dot"])["u_dot"][0])  # noqa: E731
+    lo, hi = t_lo, t_hi
+    assert f(lo) * f(hi) < 0
+    for _ in range(80):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if f(mid) * f(lo) > 0 else (lo, mid)
+    return lo
+
+
+@pytest.mark.parametrize("name", list(NEAR_PASSAGES))
+def test_rotation_apex_omega_through_a_near_passage_against_30_digit_reference(name):
+    # Regressions: R, apex, ω erred 5e-8 (pole-1e-3: Π(n₊|m) per period from float(n₊)), raised
+    # "expected n != 1" (pole-1e-7), erred 7e-9 in R and up to 0.14 in ω right at the bottom passage
+    # (1 + u1 at 40 digits; φ̇ cos θ + ψ̇ cancelling and sin θ of a θ rounded next to π in ω).
+    from mechderive.stress.reference import heavy_reference
+
+    init = NEAR_PASSAGES[name]
+    top = exact_heavy_top(BASELINE, init)
+    T = top.nutation_period
+    bottom = init["theta"] > 1
+    # the second passage: u has its extremum there (u1 at the bottom, u2 at the pole)
+    grid = np.linspace(0.5 * T, 2.0 * T, 301)
+    u = top.u(grid)
+    k = int(np.argmin(u) if bottom else np.argmax(u))
+    tp = _passage_time(top, grid[k - 1], grid[k + 1])
+    t = np.concatenate([[0.0], tp + np.array([-1e-6, -1e-9, -1e-12, 0.0, 1e-12, 1e-9, 1e-6]), [tp + 0.5 * T]])
+    ref = heavy_reference(BASELINE, init, t)  # Taylor series of the hand-written Newton–Euler equations, 30 digits
+    out = top.evaluate(t, ["R", "apex", "omega"])
+    # 1e-12: the closed form's ~1e-13 ×10 (R, apex, ω are well conditioned through the passage)
+    np.testing.assert_allclose(out["R"], ref.R, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(out["apex"], ref.R[:, 2, :], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(out["omega"], ref.omega, rtol=0, atol=1e-12 * np.linalg.norm(ref.omega[0]))

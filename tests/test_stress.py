@@ -23,15 +23,7 @@ from mechderive.stress.core import Case, Collector
 
 # --- known toolkit bugs the cases reveal (see the report of the stress task) ---------------------------
 
-NEAR_POLE_R = ("heavy-top closed form: R, apex, ω err ~3e-8 when the apex passes within ~1e-5 rad of the pole "
-               "(Π(n₊) with n₊ → 1 and the 40-digit 1 - n₊ still loses accuracy somewhere in the evaluation)")
-POLE_N_ONE = ("heavy-top closed form: evaluate(phi/psi/R/apex/omega) raises 'expected `n` != 1' when the apex "
-              "passes within ~1e-8 rad of the pole (n₊ rounds to 1 in double precision)")
-
-KNOWN_BUGS = {
-    "pole-pass-1e-3": NEAR_POLE_R,
-    "pole-pass-1e-7": POLE_N_ONE,
-}
+KNOWN_BUGS: dict[str, str] = {}
 
 
 def _param(case: Case):

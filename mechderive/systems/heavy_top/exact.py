@@ -30,7 +30,10 @@ pole (u2 = 1, so b = a) the n₊ term has a zero coefficient and is dropped; whe
 passes *near* the pole, n₊ → 1 and φ turns by almost π in a short time — correct,
 but φ, ψ are then ill-conditioned functions of time (their sum stays accurate); the
 ``conditioning`` attribute reports 1/(1 - n₊), the factor by which errors in t are
-amplified in φ there.
+amplified in φ there (near the bottom likewise 1 - n₋, with φ - ψ accurate).  R, the apex
+and ω are well conditioned through such passages and are formed so: from the half sums and
+differences (φ ± ψ)/2, their rates, and (sin θ/2, cos θ/2); 1 - u2, 1 + u1 and the advance per
+period are computed with as many extra digits as the passage needs, and Π(n₊) from 1 - n₊ itself.
 """
 
 from __future__ import annotations
@@ -790,8 +793,10 @@ def _fractions(f, args: tuple) -> list:
 def _angle_setup(sol: HeavyTopSolution) -> dict[str, _Angle]:
     """Constants of φ(t) and ψ(t), for the first request of either.
 
-    The partial-fraction coefficients come from 40-digit arithmetic; Π(n; am v0 | m) and the
-    complete Π(n | m) in the advance per period are double precision (see :data:`_FEW_PERIODS`).
+    The partial-fraction coefficients come from 40-digit arithmetic (more near a passage, see
+    :func:`_setup`); Π(n; am v0 | m) and the complete Π(n | m) in the advance per period are double
+    precision (see :data:`_FEW_PERIODS`), except for n close to 1: there Π(n; am v0 | m) and the
+    whole advance are taken at the working precision.
     """
     from ...special.integrals import elliptic_pi, elliptic_pi_incomplete
 
@@ -814,20 +819,28 @@ def _angle_setup(sol: HeavyTopSolution) -> dict[str, _Angle]:
     if far:
         n_far = np.array([float(n) for n in far])
         pi0.update(zip(far, np.atleast_1d(elliptic_pi_incomplete(n_far, float(A0), sol.m, m1=sol.m1)).tolist()))
-    if sol._period is not None and ns:
-        complete = dict(zip(ns, np.atleast_1d(elliptic_pi(np.array([float(n) for n in ns]), sol.m, m1=sol.m1)).tolist()))
+    # Near the pole the advance per period is taken at full precision: Π(n₊ | m) ~ (1 - n₊)^(-1/2)
+    # from float(n₊) would carry the relative error 1e-16/(1 - n₊) of 1 - float(n₊) (8e-8 rad per
+    # period in φ - ψ at 1 - n₊ = 5e-10), and n₊ may even round to 1.
+    precise = sol._period is not None and len(far) < len(ns)
+    if sol._period is not None and far and not precise:
+        complete = dict(zip(far, np.atleast_1d(elliptic_pi(np.array([float(n) for n in far]), sol.m,
+                                                           m1=sol.m1)).tolist()))
     for n in ns:
-        sol._mp.setdefault("one_minus_n", {})[float(n)] = float(1 - n)  # exact at 40 digits
+        sol._mp.setdefault("one_minus_n", {})[float(n)] = float(1 - n)  # to full relative accuracy
     out = {}
     for name in ("phi", "psi"):
         c0 = flats[name][0]
         terms, per = [], float(c0 / kappa) * 2 * K if sol._period is not None else None
         for c, n in kept[name]:
             terms.append((float(c / kappa), float(n), pi0[n]))
-            if per is not None:
+            if per is not None and not precise:
                 per += float(c / kappa) * 2 * complete[n]
-        out[name] = _Angle(name, float(sol.initial[name]), float(c0 / kappa), tuple(terms),
-                           None if per is None else DD(per, 0.0), 0.0)
+        if precise:
+            advance = sol._per_period_precise[name]
+        else:
+            advance = None if per is None else DD(per, 0.0)
+        out[name] = _Angle(name, float(sol.initial[name]), float(c0 / kappa), tuple(terms), advance, 0.0)
     return out
 
 
