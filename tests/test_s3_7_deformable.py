@@ -8,18 +8,22 @@ a one-dimensional integral (scipy quad); the measured order of the small-loop re
 
 from __future__ import annotations
 
+import json
+
 import mpmath
 import numpy as np
 import pytest
 import sympy as sp
 
-from mechderive.errors import InvalidInputError, ShapeError
+from mechderive.errors import IntegrationError, InvalidInputError, ShapeError
 from mechderive.kinematics.so3 import expm_so3, hat
 from mechderive.systems.deformable import (DeformableBody, ShapeLoop, centred_positions, falling_cat,
                                            falling_cat_motion, net_rotation, rotation_along)
 from mechderive.systems.deformable import cat as cat_module
 from mechderive.systems.deformable import derivation
 from mechderive.systems.deformable.examples import BASE_SHAPE, gauge_rotation, shape_symbols, three_mass_body
+
+from .conftest import run_python
 
 S = sp.Symbol("s", real=True)
 X0 = np.array([float(v) for v in BASE_SHAPE])
@@ -289,6 +293,61 @@ def test_falling_cat_motion_scene_series(flip):
 def test_cat_with_other_proportions_still_flips():
     res = falling_cat({"radius": 0.04, "half_length": 0.13, "half_mass": 1.5}, samples=11)
     assert abs(res.flip_angle[-1] - np.pi) < 1e-8 and np.max(np.abs(res.angular_momentum)) < 1e-10
+
+
+def test_cat_compiled_and_magnus_backends_agree(flip):
+    """DOP853 compiled to C on the derived Ṙ = RΩ and the Magnus steps on the compiled Ω_A: the same flip."""
+    if flip.backend != "c":
+        pytest.skip("no C compiler: only the Magnus backend runs")
+    magnus = falling_cat(samples=61, backend="magnus")
+    assert magnus.backend == "magnus"
+    # both roots of sin θ(β₀) = 0 with θ to ~1e-14; dθ/dβ₀ ~ 3
+    assert abs(magnus.peak_bend - flip.peak_bend) < 1e-12
+    np.testing.assert_allclose(flip.R, magnus.R, atol=1e-12)
+    np.testing.assert_allclose(flip.angular_momentum, magnus.angular_momentum, atol=1e-13)
+
+
+def test_cat_without_a_c_compiler_uses_magnus_steps(flip):
+    from mechderive.core import cbuild
+
+    cbuild.set_c_enabled(False)
+    try:
+        with pytest.raises(IntegrationError, match=r"expected a C compiler for backend='c'"):
+            falling_cat({"peak_bend": flip.peak_bend}, samples=3, backend="c")
+        res = falling_cat({"peak_bend": flip.peak_bend}, samples=5)
+        assert res.backend == "magnus" and abs(res.flip_angle[-1] - np.pi) < 1e-8
+    finally:
+        cbuild.set_c_enabled(None)
+    with pytest.raises(InvalidInputError, match=r"expected backend one of 'auto', 'c', 'magnus', got 'rk4'"):
+        falling_cat(samples=3, backend="rk4")
+
+
+def test_second_falling_cat_run_derives_nothing_and_never_imports_sympy(tmp_path):
+    """A warm scene run loads the cat's connection, loop and compiled stepper from the disk cache."""
+    env = {"MECHDERIVE_CACHE_DIR": str(tmp_path / "cache")}
+
+    def run(out: str):
+        code = ("import sys\nfrom mechderive.cli import main\n"
+                f"main(['run', 'falling_cat', '-o', {str(tmp_path / out)!r}, '--json'])\n"
+                "print('SYMPY', 'sympy' in sys.modules)\n")
+        proc = run_python("-c", code, env=env)
+        assert proc.returncode == 0, proc.stderr
+        return json.loads(proc.stdout[: proc.stdout.rindex("SYMPY")]), proc.stdout.rstrip().endswith("SYMPY True")
+
+    cold, cold_sympy = run("cold.csv")
+    warm, warm_sympy = run("warm.csv")
+    assert cold_sympy and not warm_sympy
+    assert "DeformableBody.angular_velocity_vector" in cold["derived"] and warm["derived"] == []
+    names = {c.rsplit(" (", 1)[0] for c in cold["compiled"]}
+    assert {"deformable.cat.connection", "deformable.cat.loop", "deformable.cat.positions"} <= names
+    if any("(C)" in c for c in cold["compiled"]):  # with a C compiler: the stepper too
+        assert "dop853_deformable_cat_flip (C)" in names
+    assert warm["compiled"] and all(c.endswith("(disk)") for c in warm["compiled"])
+    assert {c.rsplit(" (", 1)[0] for c in warm["compiled"]} == names
+    a, b = (np.genfromtxt(tmp_path / f, delimiter=",", names=True) for f in ("cold.csv", "warm.csv"))
+    assert a.dtype.names == b.dtype.names and len(a) == 201
+    for q in a.dtype.names:
+        np.testing.assert_allclose(b[q], a[q], rtol=0, atol=1e-12)
 
 
 @pytest.mark.slow
