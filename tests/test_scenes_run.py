@@ -149,3 +149,24 @@ def test_cli_scenes_lists_and_prints(capsys):
 def test_cli_run_unknown_scene_is_an_input_error(capsys):
     assert main(["run", "nope"]) == 2
     assert "expected a .toml file or a built-in scene" in capsys.readouterr().err
+
+
+def test_falling_cat_scene_reports_its_integrators_error():
+    scene = dataclasses.replace(load_builtin("falling_cat"), samples=51, quantities=("flip_angle", "L1"))
+    r = run_scene(scene)
+    est = r.report["error_estimate"]
+    assert est is not None and 0 < est <= scene.rtol and r.report["rtol_met"]
+    # the flip ends at π: the estimate is at least as large as that end-point error
+    assert abs(r.columns["flip_angle"][-1] - np.pi) <= 10 * est
+
+
+def test_near_pole_scene_says_so_for_phi_but_not_for_R():
+    # the apex passes ~5e-7 rad from the pole (stress case pole-pass-1e-3): φ and ψ each are
+    # ill-conditioned there (conditioning ~2e9), R is not (checked to 1e-15 in test_stress.py)
+    near = HEAVY.replace("theta = 0.5", "theta = 1e-3").replace("theta_dot = 0.0", "theta_dot = 0.5") \
+                .replace("psi_dot = 5.0", "psi_dot = 10.0").replace("t_end = 20.0", "t_end = 6.0")
+    phi = run_scene(load_scene(near.replace('quantities = ["u"]', 'quantities = ["phi"]')))
+    rot = run_scene(load_scene(near.replace('quantities = ["u"]', 'quantities = ["R11", "R23", "apex_z"]')))
+    assert phi.report["method"] == rot.report["method"] == "exact"
+    assert phi.report["rtol_met"] is False and "conditioning" in phi.report["note"]
+    assert rot.report["rtol_met"] is True and rot.report["error_estimate"] < 1e-12

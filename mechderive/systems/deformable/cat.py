@@ -55,7 +55,7 @@ from .holonomy import ShapeLoop, net_rotation, rotation_along
 # functions): a process whose compiled functions are in the disk cache runs the cat without it.
 
 __all__ = ["BODY_PARAMETERS", "DEFAULTS", "BACKENDS", "CACHE_NAME", "cat_body", "cat_connection", "cat_loop",
-           "flip_bend", "FallingCat", "falling_cat", "falling_cat_motion", "check_cat_parameters"]
+           "flip_bend", "FallingCat", "falling_cat", "falling_cat_motion", "cat_columns", "check_cat_parameters"]
 
 #: Body parameters: the mass of each half (kg), joint-to-centre distance, ring radius, axial half-length (m).
 BODY_PARAMETERS = ("half_mass", "joint_offset", "radius", "half_length")
@@ -447,7 +447,8 @@ def falling_cat(parameters: Mapping[str, Any] | None = None, *, duration: float 
                       {k: params[k] for k in BODY_PARAMETERS}, used)
 
 
-def falling_cat_motion(parameters: dict | None = None, *, t_end: float, samples: int) -> dict[str, np.ndarray]:
+def falling_cat_motion(parameters: dict | None = None, *, t_end: float, samples: int,
+                       rtol: float = 1e-12) -> dict[str, np.ndarray]:
     """Time series of the falling cat for a scene: a 180° flip over t ∈ [0, t_end] with L = 0.
 
     Returns arrays of length ``samples`` named ``t``; ``R11 … R33`` — the orientation of the
@@ -455,11 +456,16 @@ def falling_cat_motion(parameters: dict | None = None, *, t_end: float, samples:
     ``q0 q1 q2 q3`` — the scalar-first unit quaternion of the active rotation R(3.7) (sign
     continuous in time, q0(0) = 1); ``flip_angle`` (rad, 0 → π); ``shape_bend``,
     ``shape_swivel`` (rad); ``L1 L2 L3`` — the angular momentum in space components
-    (kg m²/s, zero to integration accuracy).  ``parameters``: see :func:`check_cat_parameters`.
+    (kg m²/s, zero to integration accuracy).  ``parameters``: see :func:`check_cat_parameters`;
+    ``rtol`` as in :func:`falling_cat`.
     """
+    return cat_columns(falling_cat(parameters, duration=t_end, samples=samples, rtol=rtol))
+
+
+def cat_columns(cat: FallingCat) -> dict[str, np.ndarray]:
+    """The named time series of :func:`falling_cat_motion` from a computed :class:`FallingCat`."""
     from ...kinematics.conversions import matrix_to_quaternion
 
-    cat = falling_cat(parameters, duration=t_end, samples=samples)
     R31 = np.swapaxes(cat.R, -1, -2)
     out: dict[str, np.ndarray] = {"t": cat.t}
     for a in range(3):
