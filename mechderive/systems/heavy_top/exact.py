@@ -135,11 +135,6 @@ def _omega_half_angles():
     return cached_lambdify("heavy_top.omega_half_angles", build, module="numpy")[0]
 
 
-#: Up to this many nutation periods the advance per period in double precision is exact enough
-#: (j·Δ errs by j·ulp(Δ) ≲ 1e-13 rad); beyond, its 40-digit value is used.
-_FEW_PERIODS = 64
-
-
 @dataclass(frozen=True)
 class _Angle:
     """The closed form of one precession-type angle: start, linear part, Π terms, advance per period."""
@@ -294,10 +289,7 @@ class _Pass:
             value = value + c * (self.pi(n) - pi0)
         if spec.per_period is None:
             return value
-        per = spec.per_period
-        if j.size and np.max(np.abs(j)) > _FEW_PERIODS:
-            # Far out, j·Δ needs Δ beyond double precision: the 40-digit value, computed once.
-            per = sol._per_period_precise[spec.name]
+        per = spec.per_period  # at 40 digits: j·Δ must not carry j·ulp(Δ) far out
         if reduced:
             return value + mod_two_pi(per, j)
         return value + j * (per.hi + per.lo)
@@ -329,8 +321,6 @@ class _Pass:
                 value = value + c * (self.pi(n) - pi0s[n])
         if a.per_period is not None:
             per_a, per_b = a.per_period, b.per_period
-            if j.size and np.max(np.abs(j)) > _FEW_PERIODS:
-                per_a, per_b = sol._per_period_precise[a.name], sol._per_period_precise[b.name]
             hi, lo = dd_add(per_a.hi, per_a.lo, sign * per_b.hi, sign * per_b.lo)  # exact sum, then exact halving
             per = DD(0.5 * float(hi), 0.5 * float(lo))
             value = value + mod_two_pi(per, j)
@@ -417,9 +407,15 @@ class HeavyTopSolution:
 
     @functools.cached_property
     def _per_period_precise(self) -> dict[str, DD]:
-        """The advance of φ and ψ per nutation period at 40 digits (for evaluation far out)."""
+        """The advance of φ and ψ per nutation period at 40 digits (double-double)."""
         with mpmath.workdps(self._mp.get("dps", _DPS)):
             return _precise_advance(self)
+
+    @functools.cached_property
+    def _angle_fractions(self) -> dict[str, tuple]:
+        """Per angle: (c0, [(c_i, n_i) kept]) of the partial fractions of φ̇, ψ̇ at 40 digits."""
+        with mpmath.workdps(self._mp.get("dps", _DPS)):
+            return _kept_fractions(self)
 
     # --- the phase ----------------------------------------------------------------------------
 
@@ -790,76 +786,74 @@ def _fractions(f, args: tuple) -> list:
         return near
 
 
+def _kept_fractions(sol: HeavyTopSolution) -> dict[str, tuple]:
+    """(c0, [(c_i, n_i)]) for φ and ψ: the partial fractions of φ̇/κ, ψ̇/κ (3.74), (3.75) in u = u1 + (u2 - u1)sn².
+
+    At 40 digits (more near a passage, see :func:`_setup`).  At an exact passage (b = ±a) the
+    n₊ (n₋) term is absent: its coefficient vanishes and it is dropped.
+    """
+    v = sol._mp
+    f = _angle_functions()
+    frac_args = (v["I1"], v["I3"], v["a"], v["b"], *v["roots"])
+    out = {}
+    for name in ("phi", "psi"):
+        flat = _fractions(f[name], frac_args)
+        kept = [(c, n) for c, n in zip(flat[1::2], flat[2::2])
+                if mpmath.isfinite(c) and mpmath.isfinite(n) and abs(c) > v["scale"] * (abs(v["a"]) + abs(v["b"]) + 1)]
+        out[name] = (flat[0], kept)
+    return out
+
+
 def _angle_setup(sol: HeavyTopSolution) -> dict[str, _Angle]:
     """Constants of φ(t) and ψ(t), for the first request of either.
 
-    The partial-fraction coefficients come from 40-digit arithmetic (more near a passage, see
-    :func:`_setup`); Π(n; am v0 | m) and the complete Π(n | m) in the advance per period are double
-    precision (see :data:`_FEW_PERIODS`), except for n close to 1: there Π(n; am v0 | m) and the
-    whole advance are taken at the working precision.
+    The partial-fraction coefficients and the advance per nutation period come from 40-digit
+    arithmetic (more near a passage, see :func:`_setup`): the advance multiplies the period count
+    j, so its double rounding would grow like j·ulp.  Π(n; am v0 | m) is double precision, except
+    for n close to 1, where it is taken at the working precision (1 - n keeps its digits).
     """
-    from ...special.integrals import elliptic_pi, elliptic_pi_incomplete
+    from ...special.integrals import elliptic_pi_incomplete
 
     if sol.kind == "steady":
         return {k: _Angle(k, sol.initial[k], 0.0, (), None, sol.initial[k + "_dot"]) for k in ("phi", "psi")}
     v = sol._mp
-    f = _angle_functions()
-    frac_args = (v["I1"], v["I3"], v["a"], v["b"], *v["roots"])
     kappa, A0, m = v["kappa"], v["A0"], v["m"]
-    K = float(v["K"])
-    flats = {name: _fractions(f[name], frac_args) for name in ("phi", "psi")}
-    kept = {name: [(c, n) for c, n in zip(flat[1::2], flat[2::2])
-                   if mpmath.isfinite(c) and mpmath.isfinite(n)
-                   and abs(c) > v["scale"] * (abs(v["a"]) + abs(v["b"]) + 1)]
-            for name, flat in flats.items()}  # b = ±a: the apex passes through the pole (bottom), no n₊ (n₋) term
+    fractions = sol._angle_fractions
     # φ and ψ share their characteristics n±: one vectorised Π call for all of them
-    ns = sorted({n for terms in kept.values() for _, n in terms})
+    ns = sorted({n for _, kept in fractions.values() for _, n in kept})
     far = [n for n in ns if 1 - n >= mpmath.mpf("1e-3")]
     pi0 = {n: float(mpmath.ellippi(n, A0, m)) for n in ns if n not in far}  # near the pole: 1 - n keeps its digits
     if far:
         n_far = np.array([float(n) for n in far])
         pi0.update(zip(far, np.atleast_1d(elliptic_pi_incomplete(n_far, float(A0), sol.m, m1=sol.m1)).tolist()))
-    # Near the pole the advance per period is taken at full precision: Π(n₊ | m) ~ (1 - n₊)^(-1/2)
-    # from float(n₊) would carry the relative error 1e-16/(1 - n₊) of 1 - float(n₊) (8e-8 rad per
-    # period in φ - ψ at 1 - n₊ = 5e-10), and n₊ may even round to 1.
-    precise = sol._period is not None and len(far) < len(ns)
-    if sol._period is not None and far and not precise:
-        complete = dict(zip(far, np.atleast_1d(elliptic_pi(np.array([float(n) for n in far]), sol.m,
-                                                           m1=sol.m1)).tolist()))
     for n in ns:
         sol._mp.setdefault("one_minus_n", {})[float(n)] = float(1 - n)  # to full relative accuracy
     out = {}
     for name in ("phi", "psi"):
-        c0 = flats[name][0]
-        terms, per = [], float(c0 / kappa) * 2 * K if sol._period is not None else None
-        for c, n in kept[name]:
-            terms.append((float(c / kappa), float(n), pi0[n]))
-            if per is not None and not precise:
-                per += float(c / kappa) * 2 * complete[n]
-        if precise:
-            advance = sol._per_period_precise[name]
-        else:
-            advance = None if per is None else DD(per, 0.0)
-        out[name] = _Angle(name, float(sol.initial[name]), float(c0 / kappa), tuple(terms), advance, 0.0)
+        c0, kept = fractions[name]
+        terms = tuple((float(c / kappa), float(n), pi0[n]) for c, n in kept)
+        advance = sol._per_period_precise[name] if sol._period is not None else None
+        out[name] = _Angle(name, float(sol.initial[name]), float(c0 / kappa), terms, advance, 0.0)
     return out
 
 
 def _precise_advance(sol: HeavyTopSolution) -> dict[str, DD]:
-    """Δφ and Δψ per nutation period at 40 digits: (c0/κ)·2K + Σ (c_i/κ)·2Π(n_i | m)."""
+    """Δφ and Δψ per nutation period at 40 digits: (c0/κ)·2K + Σ (c_i/κ)·2Π(n_i | m).
+
+    Near the pole Π(n₊ | m) ~ (1 - n₊)^(-1/2) needs 1 - n₊ to full relative accuracy (from
+    float(n₊) it would carry 1e-16/(1 - n₊): 8e-8 rad per period in φ - ψ at 1 - n₊ = 5e-10),
+    which the working precision gives.
+    """
     v = sol._mp
-    f = _angle_functions()
-    frac_args = (v["I1"], v["I3"], v["a"], v["b"], *v["roots"])
-    kappa, m, K = v["kappa"], v["m"], v["K"]
+    kappa, K = v["kappa"], v["K"]
     complete: dict = {}  # φ and ψ share their characteristics n±
     out = {}
-    for name in ("phi", "psi"):
-        flat = _fractions(f[name], frac_args)
-        per = (flat[0] / kappa) * 2 * K
-        for c, n in zip(flat[1::2], flat[2::2]):
-            if not mpmath.isfinite(c) or not mpmath.isfinite(n) or abs(c) <= v["scale"] * (abs(v["a"]) + abs(v["b"]) + 1):
-                continue
+    for name, (c0, kept) in sol._angle_fractions.items():
+        per = (c0 / kappa) * 2 * K
+        for c, n in kept:
             if n not in complete:
                 complete[n] = complete_pi_mp(n, v["m1"])
             per += (c / kappa) * 2 * complete[n]
         out[name] = DD.of(per)
     return out
+
