@@ -56,6 +56,17 @@ static double rms_scaled(const double *x, const double *scale)
     return sqrt(s / NDIM);
 }
 
+/* K[s] = f(y + h Σ_{j<s} A[s][j] K[j]): one stage, of the step or of the dense output */
+static void stage(int s, double h, const double *y, double K[NSTX][NDIM], const double *par, double *ytmp)
+{
+    for (int i = 0; i < NDIM; i++) {
+        double acc = 0.0;
+        for (int j = 0; j < s; j++) acc += DOP_A[s][j] * K[j][i];
+        ytmp[i] = y[i] + h * acc;
+    }
+    rhs(ytmp, par, K[s]);
+}
+
 /* select_initial_step of scipy.integrate._ivp.common, order 7 */
 static double initial_step(const double *y0, const double *f0, const double *par, double interval,
                            double rtol, double atol, long *nfev)
@@ -101,14 +112,7 @@ int dop853_solve(const double *par, const double *y0, int n_out, const double *t
             if (t_new > t_end) t_new = t_end;
             h = t_new - t;
             h_abs = fabs(h);
-            for (int s = 1; s < NST; s++) {
-                for (int i = 0; i < NDIM; i++) {
-                    double acc = 0.0;
-                    for (int j = 0; j < s; j++) acc += DOP_A[s][j] * K[j][i];
-                    ytmp[i] = y[i] + h * acc;
-                }
-                rhs(ytmp, par, K[s]); nfev++;
-            }
+            for (int s = 1; s < NST; s++) { stage(s, h, y, K, par, ytmp); nfev++; }
             for (int i = 0; i < NDIM; i++) {
                 double acc = 0.0;
                 for (int j = 0; j < NST; j++) acc += DOP_B[j] * K[j][i];
@@ -143,14 +147,7 @@ int dop853_solve(const double *par, const double *y0, int n_out, const double *t
                 for (int i = 0; i < NDIM; i++) out[i] = y_new[i];
             } else {
                 if (!dense) {
-                    for (int s = NST + 1; s < NSTX; s++) {
-                        for (int i = 0; i < NDIM; i++) {
-                            double acc = 0.0;
-                            for (int j = 0; j < s; j++) acc += DOP_A[s][j] * K[j][i];
-                            ytmp[i] = y[i] + h * acc;
-                        }
-                        rhs(ytmp, par, K[s]); nfev++;
-                    }
+                    for (int s = NST + 1; s < NSTX; s++) { stage(s, h, y, K, par, ytmp); nfev++; }
                     for (int i = 0; i < NDIM; i++) {
                         double dy = y_new[i] - y[i];
                         F[0][i] = dy;
