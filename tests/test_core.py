@@ -126,3 +126,38 @@ def test_validation_messages():
         as_finite_array("abc", "w")
     with pytest.raises(InvalidInputError, match=r"expected `I1` > 0, got -1.0"):
         check_positive(-1, "I1")
+
+
+# --- the disk cache of generated code (principle 2: nothing derived or compiled twice) -----------------
+
+def test_disk_cache_keeps_bytecode_and_survives_a_corrupt_copy(tmp_path, monkeypatch):
+    import sympy as sp
+
+    from mechderive.core import codecache
+
+    monkeypatch.setenv("MECHDERIVE_CACHE_DIR", str(tmp_path))
+    codecache.set_disk_cache(True)
+    x = sp.Symbol("x")
+    try:
+        f, _ = codecache.cached_lambdify("test.square_plus_one", lambda: ([x], x**2 + 1))
+        codecache.clear_memory()
+        g, _ = codecache.cached_lambdify("test.square_plus_one", lambda: pytest.fail("derived again"))
+        source = next(tmp_path.rglob("test.square_plus_one.numpy.py"))
+        marshalled = source.with_name(source.name + ".marshal")
+        assert marshalled.exists() and g(3.0) == f(3.0) == [10.0]
+        marshalled.write_bytes(b"not bytecode")  # a damaged copy is recompiled from the source
+        codecache.clear_memory()
+        h, _ = codecache.cached_lambdify("test.square_plus_one", lambda: pytest.fail("derived again"))
+        assert h(2.0) == [5.0]
+    finally:
+        codecache.set_disk_cache(None)
+        codecache.clear_memory()
+
+
+def test_dependency_versions_match_importlib_metadata():
+    from importlib.metadata import version
+
+    from mechderive.core.codecache import _version
+
+    for dist in ("sympy", "numpy", "mpmath"):
+        assert _version(dist) == version(dist)

@@ -139,7 +139,9 @@ def _code(path: Path, source: str) -> Any:
 
     compiled = path.with_name(path.name + ".marshal")
     try:
-        return marshal.loads(compiled.read_bytes())
+        code = marshal.loads(compiled.read_bytes())
+        if isinstance(code, type(_code.__code__)):
+            return code
     except (OSError, ValueError, EOFError, TypeError):
         pass
     code = compile(source, str(path), "exec")
