@@ -458,3 +458,39 @@ def test_pi_principal_value_direct_mpmath(m, n):
         refs = [_real(mpmath.ellippi(n, mpmath.mpf(float(p)), mm)) for p in phis]
     K = float(ellipk_m1(1 - m))
     assert _max_excess(elliptic_pi_incomplete(n, phis, m), refs, PI_RTOL, PI_RTOL * K) <= 1.0
+
+
+# --- Π(n; am u | m) by its Fourier series (special/pi_series.py) -------------------------------------
+
+@pytest.mark.parametrize("m, ns", [(0.0903793566, (0.5524676, -0.0875324)),   # the BASELINE top's n±
+                                   (0.5, (0.9, -3.0)), (0.999, (0.5, -0.5)), (0.0, (0.3, -1.0))])
+def test_pi_series_matches_30_digit_mpmath(m, ns):
+    from mechderive.special import ellipk_m1, jacobi_sn_cn_dn
+    from mechderive.special.pi_series import fit_pi_series
+
+    K = float(ellipk_m1(1.0 - m))
+    series = fit_pi_series(np.array(ns), lambda u: jacobi_sn_cn_dn(u, m)[0] ** 2, K)
+    assert series is not None
+    u = np.array([0.0, 0.3, K - 1e-9, K, 1.7 * K, 2 * K, 7.25 * K, -3.1])  # Π is defined for every real u
+    values = series(u)
+    with mpmath.workdps(30):
+        for i, n in enumerate(ns):
+            for x, v in zip(u, values[i]):
+                # ∫₀^x du/(1 - n sn²u) by quadrature at 30 digits, split at the half periods
+                cuts = [0.0] + [k * K for k in range(-8, 9) if 0 < k * K / x < 1] + [x] if x else [0.0, 0.0]
+                ref = sum(mpmath.quad(lambda t: 1 / (1 - n * mpmath.ellipfun("sn", t, m=m) ** 2), [a, b])
+                          for a, b in zip(cuts[:-1], cuts[1:]))
+                # a few ulp of the largest value over the points (the series' rounding is absolute)
+                assert abs(v - float(ref)) <= 8e-16 * max(1.0, float(np.max(np.abs(values[i])))), (n, x)
+
+
+def test_pi_series_declines_slow_convergence():
+    from mechderive.special import ellipk_m1, jacobi_sn_cn_dn
+    from mechderive.special.pi_series import fit_pi_series
+
+    K = float(ellipk_m1(0.7))
+    # n → 1: the integrand's pole approaches the real axis (an apex passing near the pole)
+    assert fit_pi_series(np.array([0.99999]), lambda u: jacobi_sn_cn_dn(u, 0.3)[0] ** 2, K) is None
+    K = float(ellipk_m1(1e-30))
+    # m → 1: the period grows (K ≈ 36) and the series of a near-separatrix motion needs too many terms
+    assert fit_pi_series(np.array([0.5]), lambda u: jacobi_sn_cn_dn(u, 1 - 1e-30, m1=1e-30)[0] ** 2, K) is None

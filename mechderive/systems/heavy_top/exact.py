@@ -194,8 +194,11 @@ class _Pass:
     def pis(self, ns) -> None:
         """Π(n; am r | m) for every n in ``ns`` not yet computed, straight from the phase r.
 
-        One call for all n shares sn, cn, dn of r; going through am(r) would amplify its rounding
-        by 1/dn near the turning points when m → 1.
+        Usually from the motion's Fourier series of Π (:mod:`mechderive.special.pi_series`, fitted
+        once per motion, ~6× cheaper at thousands of phases); where that series converges too
+        slowly (a passage near the pole, m near 1), by Carlson's form, one call for all n sharing
+        sn, cn, dn of r — going through am(r) would amplify its rounding by 1/dn near the turning
+        points when m → 1.
         """
         from ...special.integrals import pi_of_am
 
@@ -209,7 +212,13 @@ class _Pass:
                 self._get(f"pi({n!r})", lambda: self._pi_near_one(n, n1))
             else:
                 batch.append(n)
-        if batch:
+        series = self.sol._pi_series(tuple(batch)) if batch and self.sol._period is not None else None
+        if series is not None:
+            shape = np.shape(self.phase()[1])
+            values = series(np.reshape(self.phase()[1], (-1,)))
+            for n, value in zip(batch, values):
+                self._get(f"pi({n!r})", lambda: value.reshape(shape))
+        elif batch:
             shape = np.shape(self.phase()[1])
             flat = [np.reshape(x, (1, -1)) for x in self.reduced_jacobi()]
             values = np.asarray(pi_of_am(np.array(batch)[:, None], np.reshape(self.phase()[1], (1, -1)),
@@ -410,6 +419,17 @@ class HeavyTopSolution:
         """The advance of φ and ψ per nutation period at 40 digits (double-double)."""
         with mpmath.workdps(self._mp.get("dps", _DPS)):
             return _precise_advance(self)
+
+    def _pi_series(self, ns: tuple[float, ...]) -> Any:
+        """The Fourier series of Π(n; am u | m) for the characteristics ``ns`` (fitted once), or None."""
+        store = self._mp.setdefault("pi_series", {})
+        if ns not in store:
+            from ...special.jacobi import jacobi_sn_cn_dn
+            from ...special.pi_series import fit_pi_series
+
+            store[ns] = fit_pi_series(np.array(ns), lambda u: jacobi_sn_cn_dn(u, self.m, m1=self.m1)[0] ** 2,
+                                      self._period.hi / 2)
+        return store[ns]
 
     @functools.cached_property
     def _angle_fractions(self) -> dict[str, tuple]:
