@@ -166,3 +166,20 @@ def test_asking_for_omega_does_not_derive_or_evaluate_the_orientation():
     first, second = proc.stdout.strip().splitlines()
     assert "precession" not in first and first.endswith("False")
     assert "precession_partial_fractions" in second and second.endswith("True")
+
+
+def test_rotation_by_fourier_series_equals_rotation_by_carlson(monkeypatch):
+    # φ' of the L frame takes Π(n; am u | m): the usual path sums its Fourier series, the fallback
+    # Carlson's R_J.  Over 100 polhode periods the two R agree to rounding.
+    import mechderive.special.pi_series as pi_series
+    from mechderive.systems.free_top.exact import exact_free_top
+
+    sol = exact_free_top([1.0, 2.0, 3.0], [1.0, 0.5, 1.0])
+    t = np.linspace(0.0, 100 * sol.polhode_period, 2001)
+    fast = sol.rotation(t)
+    assert sol._mp["pi_series"] is not None
+    monkeypatch.setattr(pi_series, "fit_pi_series", lambda *a, **k: None)
+    slow = exact_free_top([1.0, 2.0, 3.0], [1.0, 0.5, 1.0])
+    carlson = slow.rotation(t)
+    assert slow._mp["pi_series"] is None
+    np.testing.assert_allclose(fast, carlson, rtol=0, atol=1e-14)

@@ -207,6 +207,17 @@ class FreeTopSolution:
         """(j, r): u(t) = λt + u0 = j·4K + r with integer j and r in [0, 4K) (see :mod:`mechderive.core.phase`)."""
         return reduce_phase(self._lam, self._u0, self._period, t)
 
+    def _pi_series(self):
+        """The Fourier series of Π(n; am u | m) of this motion's precession (fitted once), or None."""
+        if "pi_series" not in self._mp:
+            from ...special.jacobi import jacobi_sn_cn_dn
+            from ...special.pi_series import fit_pi_series
+
+            self._mp["pi_series"] = fit_pi_series(
+                np.array([self._orient.n]), lambda u: jacobi_sn_cn_dn(u, self.m, m1=self.m1)[0] ** 2,
+                self._period.hi / 4)
+        return self._mp["pi_series"]
+
     def _elliptic(self, t: np.ndarray):
         from ...special.jacobi import jacobi_am, jacobi_sn_cn_dn
 
@@ -262,9 +273,15 @@ class FreeTopSolution:
             k = np.sqrt(-o.n)
             bounded = o.c2_over_lam * k / (1 - o.n) * (np.arctan(k * np.tanh(r)) - o.arctan_u0)
             return o.phi0 + mod_two_pi(o.rate_inf, t) + bounded, theta, psi_red
-        # Π(n; am r | m) straight from r (sn, cn, dn of r): through the rounded am(r) the error would
-        # be amplified by 1/((1 - n sin²A) dn) ~ 1/√(1 - m) at the saddle passages near the separatrix.
-        pi_r = np.asarray(pi_of_am(o.n, r, self.m, m1=self.m1))
+        # Π(n; am r | m) straight from r: by the motion's Fourier series where it converges
+        # (special.pi_series, fitted once), else by Carlson from sn, cn, dn of r — through the rounded
+        # am(r) the error would be amplified by 1/((1 - n sin²A) dn) ~ 1/√(1 - m) at the saddle
+        # passages near the separatrix.
+        series = self._pi_series()
+        if series is not None:
+            pi_r = series(r)[0]
+        else:
+            pi_r = np.asarray(pi_of_am(o.n, r, self.m, m1=self.m1))
         phi_red = o.phi0 + o.c1_over_lam * (r - self._u0.hi - self._u0.lo) + o.c2_over_lam * (pi_r - o.pi_u0)
         if continuous:
             return phi_red + j * (o.dphi.hi + o.dphi.lo), theta, psi_red - s * 2 * np.pi * j
