@@ -285,12 +285,11 @@ def test_angles_by_fourier_series_equal_angles_by_carlson(monkeypatch):
     top = exact_heavy_top(params, initial)
     t = np.linspace(0.0, 100 * top.nutation_period, 2001)
     fast = top.evaluate(t, ["phi", "psi", "R"])
-    assert top._mp["pi_series"], "the series path was not taken"
-    assert all(s is not None for s in top._mp["pi_series"].values())
+    assert top._mp["pi_series"] is not None, "the series path was not taken"
     monkeypatch.setattr(pi_series, "fit_pi_series", lambda *a, **k: None)
     slow = exact_heavy_top(params, initial)
     carlson = slow.evaluate(t, ["phi", "psi", "R"])
-    assert all(s is None for s in slow._mp["pi_series"].values())
+    assert slow._mp["pi_series"] is None
     # ψ reaches ~1600 rad: its own ulp is 2e-13
     for q in ("phi", "psi"):
         np.testing.assert_allclose(fast[q], carlson[q], rtol=0, atol=5e-13)

@@ -212,12 +212,13 @@ class _Pass:
                 self._get(f"pi({n!r})", lambda: self._pi_near_one(n, n1))
             else:
                 batch.append(n)
-        series = self.sol._pi_series(tuple(batch)) if batch and self.sol._period is not None else None
-        if series is not None:
+        series = self.sol._pi_series() if batch else None
+        if series is not None and all(n in series.n for n in batch):
             shape = np.shape(self.phase()[1])
             values = series(np.reshape(self.phase()[1], (-1,)))
-            for n, value in zip(batch, values):
-                self._get(f"pi({n!r})", lambda: value.reshape(shape))
+            for n, value in zip(series.n.tolist(), values):
+                if n in batch:
+                    self._get(f"pi({n!r})", lambda: value.reshape(shape))
         elif batch:
             shape = np.shape(self.phase()[1])
             flat = [np.reshape(x, (1, -1)) for x in self.reduced_jacobi()]
@@ -420,16 +421,17 @@ class HeavyTopSolution:
         with mpmath.workdps(self._mp.get("dps", _DPS)):
             return _precise_advance(self)
 
-    def _pi_series(self, ns: tuple[float, ...]) -> Any:
-        """The Fourier series of Π(n; am u | m) for the characteristics ``ns`` (fitted once), or None."""
-        store = self._mp.setdefault("pi_series", {})
-        if ns not in store:
+    def _pi_series(self) -> Any:
+        """The Fourier series of Π(n; am u | m) for the characteristics n± not close to 1 (fitted once
+        per motion, after :func:`_angle_setup`), or None where it would converge too slowly."""
+        if "pi_series" not in self._mp:
             from ...special.jacobi import jacobi_sn_cn_dn
             from ...special.pi_series import fit_pi_series
 
-            store[ns] = fit_pi_series(np.array(ns), lambda u: jacobi_sn_cn_dn(u, self.m, m1=self.m1)[0] ** 2,
-                                      self._period.hi / 2)
-        return store[ns]
+            ns = sorted(n for n, n1 in self._mp.get("one_minus_n", {}).items() if n1 >= 1e-3)
+            self._mp["pi_series"] = None if not ns or self._period is None else fit_pi_series(
+                np.array(ns), lambda u: jacobi_sn_cn_dn(u, self.m, m1=self.m1)[0] ** 2, self._period.hi / 2)
+        return self._mp["pi_series"]
 
     @functools.cached_property
     def _angle_fractions(self) -> dict[str, tuple]:
@@ -842,12 +844,17 @@ def _angle_setup(sol: HeavyTopSolution) -> dict[str, _Angle]:
     # φ and ψ share their characteristics n±: one vectorised Π call for all of them
     ns = sorted({n for _, kept in fractions.values() for _, n in kept})
     far = [n for n in ns if 1 - n >= mpmath.mpf("1e-3")]
-    pi0 = {n: float(mpmath.ellippi(n, A0, m)) for n in ns if n not in far}  # near the pole: 1 - n keeps its digits
-    if far:
-        n_far = np.array([float(n) for n in far])
-        pi0.update(zip(far, np.atleast_1d(elliptic_pi_incomplete(n_far, float(A0), sol.m, m1=sol.m1)).tolist()))
     for n in ns:
         sol._mp.setdefault("one_minus_n", {})[float(n)] = float(1 - n)  # to full relative accuracy
+    pi0 = {n: float(mpmath.ellippi(n, A0, m)) for n in ns if n not in far}  # near the pole: 1 - n keeps its digits
+    series = sol._pi_series() if far else None
+    if series is not None:
+        # Π(n; am v0 | m) from the same series the samples use: φ(0) = φ0 to rounding
+        at_v0 = series(np.array([sol._v0.hi + sol._v0.lo]))[:, 0]
+        pi0.update((n, float(at_v0[series.n.tolist().index(float(n))])) for n in far)
+    elif far:
+        n_far = np.array([float(n) for n in far])
+        pi0.update(zip(far, np.atleast_1d(elliptic_pi_incomplete(n_far, float(A0), sol.m, m1=sol.m1)).tolist()))
     out = {}
     for name in ("phi", "psi"):
         c0, kept = fractions[name]
