@@ -191,7 +191,8 @@ class TestMpmathReference_3_11:
         return np.stack(np.broadcast_arrays(np.sin(s) + 0.5, 0.7 * np.cos(2 * s), 0.3 + s**2), axis=-1)
 
     @pytest.fixture(scope="class")
-    def reference(self):
+    @classmethod
+    def reference(cls):
         with mpmath.workdps(30):
             def rhs(s, y):
                 w1, w2, w3 = mpmath.sin(s) + 0.5, 0.7 * mpmath.cos(2 * s), 0.3 + s * s
@@ -199,7 +200,7 @@ class TestMpmathReference_3_11:
                 return [sum(W[i][k] * y[3 * k + j] for k in range(3)) for i in range(3) for j in range(3)]
 
             sol = mpmath.odefun(rhs, 0, [1, 0, 0, 0, 1, 0, 0, 0, 1])
-            return {s: np.array([float(v) for v in sol(mpmath.mpf(s))]).reshape(3, 3) for s in (0.5, self.T)}
+            return {s: np.array([float(v) for v in sol(mpmath.mpf(s))]).reshape(3, 3) for s in (0.5, cls.T)}
 
     def test_fixed_step_order6_matches_mpmath(self, reference):
         # 100 order-6 steps of 0.01: truncation ≈ 1e-16, so only rounding (~1e-15) remains.
