@@ -7,8 +7,11 @@ not even derived).  The report lists exactly what was derived and compiled in th
 run (empty on a warm disk cache: see :mod:`mechderive.core.codecache`).
 
 Method choice (``method = "auto"``): the closed form where the system has one
-(free_top, heavy_top) — it is both faster and more accurate than integration at
-every rtol (see ``benchmarks/``); integration otherwise (falling_cat).  The closed
+(free_top, heavy_top) — it is more accurate than integration at every rtol, and as fast
+as the compiled DOP853 at its loosest tolerances (see ``benchmarks/``); integration
+otherwise (falling_cat).  Near a pole passage φ and ψ each are ill-conditioned for any
+method; the closed form's estimate says so (its conditioning), and the report says what
+is well conditioned instead rather than switching methods silently.  The closed
 form's error is ~1e-13 absolute (measured against 30-digit references in the test
 suite), plus the rounding of the continuous angles themselves; a requested rtol
 below that is reported as not attainable rather than silently ignored.
@@ -384,9 +387,10 @@ def run_scene(scene: Scene) -> RunResult:
     total = time.perf_counter() - start
     estimate = info.get("error_estimate")
     if method == "exact" and estimate is not None and estimate > max(scene.rtol, CLOSED_FORM_ERROR):
-        note = (note + "; " if note else "") + (f"error estimate {estimate:.2g} (near-pole conditioning) exceeds "
-                                                f"the requested rtol {scene.rtol:g}: not met; method 'integrate' "
-                                                "has no such singularity")
+        note = (note + "; " if note else "") + (f"error estimate {estimate:.2g} (near-pole conditioning of φ, ψ) "
+                                                f"exceeds the requested rtol {scene.rtol:g}: not met; R, the apex "
+                                                "and ω are well conditioned (ask for those), or method 'integrate' "
+                                                "estimates its own error at the samples")
     if method == "integrate":
         # The integrators' estimates are absolute (angles in rad, R entries): compared with rtol as is,
         # since a relative error of a growing angle would mean nothing.
