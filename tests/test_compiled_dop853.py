@@ -173,3 +173,20 @@ def test_an_unwritable_cache_folder_builds_privately(tmp_path, monkeypatch):
         assert out[-1, 0] == pytest.approx(np.exp(-1.0), rel=1e-11)   # y = e^-t
     finally:
         codecache.set_disk_cache(None)
+
+
+def test_a_failing_compiler_falls_back_and_says_why(tmp_path, monkeypatch):
+    from mechderive.solvers import dop853_c
+
+    fake = tmp_path / "cc"
+    fake.write_text("#!/bin/sh\necho 'fake compiler: refusing' >&2\nexit 1\n")
+    fake.chmod(0o755)
+    monkeypatch.setenv("CC", str(fake))
+    monkeypatch.setenv("MECHDERIVE_NO_DISK_CACHE", "1")  # build privately, so no cached library is found
+
+    import sympy as sp
+
+    y = sp.Symbol("y")
+    assert dop853_c.compiled_dop853("test_failing_cc", lambda: (sp.Matrix([-y]), [y], [])) is None
+    err = dop853_c.unavailable_error("test_failing_cc")
+    assert "fake compiler: refusing" in str(err) and "backend='auto' or 'scipy'" in str(err)

@@ -29,7 +29,7 @@ import numpy as np
 from ..errors import IntegrationError
 from ..core import cbuild
 
-__all__ = ["CompiledDOP853", "compiled_dop853", "dop853_c_source", "MIN_RTOL"]
+__all__ = ["CompiledDOP853", "compiled_dop853", "dop853_c_source", "unavailable_error", "MIN_RTOL"]
 
 #: The smallest rtol accepted, as in SciPy (100 ε): below it the controller chases rounding.
 MIN_RTOL = 100 * np.finfo(float).eps
@@ -257,6 +257,18 @@ class CompiledDOP853:
         return out, dict(nfev=int(stats[0]), steps=int(stats[1]), rejected=int(stats[2]))
 
 
+#: Why a stepper could not be built or loaded in this process, by name.
+_FAILED: dict[str, str] = {}
+
+
+def unavailable_error(name: str, fallback: str = "scipy") -> IntegrationError:
+    """The error for ``backend='c'`` when :func:`compiled_dop853` gave None for ``name``."""
+    why = _FAILED.get(name) or ("no C compiler found (cc, gcc or clang on PATH, or $CC)" if cbuild.compiler() is None
+                                else "the C path is switched off (MECHDERIVE_NO_C or set_c_enabled(False))")
+    return IntegrationError(f"expected a C compiler for backend='c', got none usable: {why}; "
+                            f"use backend='auto' or '{fallback}'")
+
+
 def compiled_dop853(name: str, build: Callable[[], tuple[Any, Sequence[Any], Sequence[Any]]]) -> CompiledDOP853 | None:
     """The compiled stepper ``name``, or None when no C compiler is available (or it is switched off).
 
@@ -272,7 +284,11 @@ def compiled_dop853(name: str, build: Callable[[], tuple[Any, Sequence[Any], Seq
         text = dop853_c_source(exprs, state, params, name=name)
         return text + f"\nvoid dop853_dims(int *out) {{ out[0] = {len(state)}; out[1] = {len(params)}; }}\n"
 
-    lib = cbuild.load_library(f"dop853_{name}", source)
+    try:
+        lib = cbuild.load_library(f"dop853_{name}", source)
+    except (cbuild.CBuildError, OSError) as exc:  # a broken compiler or an unloadable file: fall back, and say why
+        _FAILED[name] = f"{type(exc).__name__}: {exc}"
+        return None
     dims = (ctypes.c_int * 2)()
     lib.dop853_dims(dims)
     fn = lib.dop853_solve

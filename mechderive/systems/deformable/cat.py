@@ -228,8 +228,8 @@ def _resolve_backend(backend: str) -> tuple[str, Any]:
         raise InvalidInputError(f"expected backend one of {', '.join(map(repr, BACKENDS))}, got {backend!r}")
     stepper = None if backend == "magnus" else _stepper()
     if stepper is None and backend == "c":
-        raise IntegrationError("expected a C compiler for backend='c' (cc, gcc or clang on PATH, or $CC; "
-                               "MECHDERIVE_NO_C unset), found none; use backend='auto' or 'magnus'")
+        from ...solvers.dop853_c import unavailable_error
+        raise unavailable_error(_STEPPER, "magnus")
     return ("c" if stepper is not None else "magnus"), stepper
 
 

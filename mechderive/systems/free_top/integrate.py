@@ -381,8 +381,8 @@ def _run_dop853(inertia: np.ndarray, w0: np.ndarray, q0: np.ndarray, t: np.ndarr
     if backend != "scipy" and torque is None:
         compiled = _compiled_dop853()
         if compiled is None and backend == "c":
-            raise IntegrationError("expected a C compiler for backend='c' (cc, gcc or clang on PATH, or $CC; "
-                                   "MECHDERIVE_NO_C unset), found none; use backend='auto' or 'scipy'")
+            from ...solvers.dop853_c import unavailable_error
+            raise unavailable_error("free_top", "scipy")
     rhs = _state_rhs() if compiled is None else None
 
     if compiled is not None:

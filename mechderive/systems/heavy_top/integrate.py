@@ -472,8 +472,8 @@ def _run_dop853(p: dict, w0: np.ndarray, q0: np.ndarray, t: np.ndarray, rtol: fl
     y0 = np.concatenate([w0, q0])
     compiled = None if backend == "scipy" else _compiled_dop853()
     if compiled is None and backend == "c":
-        raise IntegrationError("expected a C compiler for backend='c' (cc, gcc or clang on PATH, or $CC; "
-                               "MECHDERIVE_NO_C unset), found none; use backend='auto' or 'scipy'")
+        from ...solvers.dop853_c import unavailable_error
+        raise unavailable_error("heavy_top", "scipy")
     fun = None
     if compiled is None:
         rhs = _rhs()
