@@ -429,17 +429,23 @@ def test_energy_check_detects_the_drift_of_dop853():
     assert second > 1.5 * first
 
 
-@pytest.mark.slow
+_NO_C = pytest.mark.skipif(not __import__("mechderive.core.cbuild", fromlist=["c_enabled"]).c_enabled(),
+                           reason="no C compiler on this machine")
+
+
+@pytest.mark.parametrize("backend", [pytest.param("c", marks=_NO_C),  # ~0.3 s each compiled
+                                     pytest.param("python", marks=pytest.mark.slow)])  # ~1 min each
 @pytest.mark.parametrize("order, step", [(2, 0.05), (4, 0.05), (6, 0.1)])
-def test_splitting_keeps_energy_bounded_1e6_steps(order, step):
+def test_splitting_keeps_energy_bounded_1e6_steps(order, step, backend):
     """10⁶ steps (50 000 – 100 000 s, 14 000 – 28 000 nutation periods) at each order.
 
     Steps are chosen so that the O(h^p) energy oscillation (≳ 1e-9) dominates the rounding walk
     (~1e-12 over 10⁶ steps); the bound on p_φ is rounding: ~1e-18 per stage over ≤ 7·10⁶ stages.
     """
     t = np.linspace(0.0, 1e6 * step, 2001)
-    run = integrate_heavy_top(PARAMS, BASE, t, method="splitting", order=order, step=step, estimate_error=False)
-    assert run.n_steps == 1_000_000
+    run = integrate_heavy_top(PARAMS, BASE, t, method="splitting", order=order, step=step, estimate_error=False,
+                              backend=backend)
+    assert run.n_steps == 1_000_000 and run.backend == backend
     first, second = _energy_halves(run)
     assert second < 1.1 * first, (first, second)
     assert run.p_psi_drift == 0.0
@@ -575,3 +581,18 @@ def test_keys_are_documented():
     assert PARAM_KEYS == ("I1", "I3", "M", "g", "l")
     assert INITIAL_KEYS == ("theta", "phi", "psi", "theta_dot", "phi_dot", "psi_dot")
     assert omega_symbols()[2].name == "omega3"
+
+
+@pytest.mark.skipif(not __import__("mechderive.core.cbuild", fromlist=["c_enabled"]).c_enabled(),
+                    reason="no C compiler on this machine")
+@pytest.mark.parametrize("order", [2, 4, 6])
+def test_compiled_splitting_is_the_python_splitting(order):
+    # The same stage maps in the same order (kick_drift.propagate's schedule): equal to rounding,
+    # which over 20 000 steps walks to ~1e-13.
+    t = np.linspace(0.0, 100.0, 201)
+    c = integrate_heavy_top(PARAMS, BASE, t, method="splitting", order=order, step=0.005, backend="c")
+    py = integrate_heavy_top(PARAMS, BASE, t, method="splitting", order=order, step=0.005, backend="python")
+    assert (c.backend, py.backend) == ("c", "python") and c.n_steps == py.n_steps
+    np.testing.assert_allclose(c.omega, py.omega, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(c.quaternion, py.quaternion, rtol=0, atol=1e-12)
+    assert c.omega_error_estimate == pytest.approx(py.omega_error_estimate, rel=1e-3)

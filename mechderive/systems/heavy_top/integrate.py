@@ -39,7 +39,9 @@ Methods (``method=``):
 ``"splitting"``
     The kick–drift–kick splitting H = T + V (:mod:`mechderive.solvers.kick_drift`): the free
     symmetric top's exact flow (two commuting rotations, :attr:`.rigid_model.HeavyTopRigidModel.free_flow`)
-    and the gravity kick L → L + h τ(q), Strang-composed (order 2) and raised to order 4 / 6
+    and the gravity kick L → L + h τ(q) — one derived stage map, looped in compiled C
+    (:mod:`mechderive.solvers.kick_drift_c`) where a C compiler is found —, Strang-composed (order 2)
+    and raised to order 4 / 6
     (Suzuki's 5-stage fractal / Yoshida's 7-stage solution A, ``order=``; default 4).  Fixed
     step: each interval of ``t_eval`` is cut into ceil(Δt/``step``) equal steps.  Both sub-flows
     are exact Hamiltonian flows, so the method is symplectic and time-reversible: the energy error
@@ -86,6 +88,8 @@ __all__ = ["integrate_heavy_top", "integrate_heavy_top_ensemble", "HeavyTopTraje
            "METHODS", "SPLITTING_ORDERS", "PARAM_KEYS", "INITIAL_KEYS"]
 
 METHODS = ("DOP853", "splitting")
+#: The splitting's backends: the stage loop compiled to C with the derived stage map, or Python.
+SPLITTING_BACKENDS = ("auto", "c", "python")
 from .parameters import INITIAL_KEYS, PARAM_KEYS, check_initial, check_params  # noqa: E402,F401
 
 
@@ -350,8 +354,9 @@ def integrate_heavy_top(params: Mapping[str, float], initial: Mapping[str, float
     t_eval : strictly increasing output times (s), at least 2.
     method : ``"DOP853"`` (``rtol``, ``atol``, ``backend``) or ``"splitting"`` (``step`` (s)
         required, ``order`` 2, 4 (default) or 6).
-    backend : DOP853 only: ``"auto"`` (compiled C where a C compiler is found, else SciPy),
-        ``"c"`` (raises :class:`IntegrationError` without a compiler) or ``"scipy"``.
+    backend : ``"auto"`` (compiled C where a C compiler is found), ``"c"`` (raises
+        :class:`IntegrationError` without a compiler), or the uncompiled path: ``"scipy"``
+        (DOP853) / ``"python"`` (the splitting's stage loop in Python).
     estimate_error : estimate the error by one extra run, reported in ``omega_error_estimate``
         (rad/s), ``angle_error_estimate`` (rad) and ``error_estimate_kind``:
         DOP853 — the distance to a rerun at rtol/1000, atol/1000 (rtol floored at 2.3e-14,
@@ -364,7 +369,11 @@ def integrate_heavy_top(params: Mapping[str, float], initial: Mapping[str, float
     on bad input, :class:`IntegrationError` if SciPy fails.
     """
     method = _check_method(method)
-    backend = check_backend(backend)
+    if method == "DOP853":
+        backend = check_backend(backend)
+    elif backend not in SPLITTING_BACKENDS:
+        raise InvalidInputError(f"expected backend one of {', '.join(map(repr, SPLITTING_BACKENDS))} with "
+                                f"method='splitting', got {backend!r}")
     p = check_params(params)
     if any(np.ndim(v) for v in p.values()):
         raise ShapeError("expected scalar `params` values (use integrate_heavy_top_ensemble for arrays), got arrays")
@@ -381,9 +390,6 @@ def integrate_heavy_top(params: Mapping[str, float], initial: Mapping[str, float
         rtol = 1e-10 if rtol is None else check_positive(rtol, "rtol")
         atol = rtol / 100 if atol is None else check_positive(atol, "atol")
         return _run_dop853(p, w0, q0, t, rtol, atol, estimate_error, backend)
-    if backend != "auto":
-        raise InvalidInputError(f"expected `backend` only with method='DOP853', got backend={backend!r} "
-                                "with method='splitting'")
     for name, value in (("rtol", rtol), ("atol", atol)):
         if value is not None:
             raise InvalidInputError(f"expected `{name}` only with method='DOP853', got {name}={value!r} "
@@ -392,7 +398,7 @@ def integrate_heavy_top(params: Mapping[str, float], initial: Mapping[str, float
         raise InvalidInputError("expected a step size `step` > 0 with method='splitting', got step=None")
     step = check_positive(step, "step")
     order = _check_order(4 if order is None else order)
-    return _run_splitting(p, w0, q0, t, step, order, estimate_error)
+    return _run_splitting(p, w0, q0, t, step, order, estimate_error, backend)
 
 
 def integrate_heavy_top_ensemble(params: Mapping[str, Any], initial: Mapping[str, Any], t_eval: Sequence[float], *,
@@ -492,33 +498,57 @@ def _run_dop853(p: dict, w0: np.ndarray, q0: np.ndarray, t: np.ndarray, rtol: fl
                    backend="scipy" if compiled is None else "c")
 
 
+def _compiled_splitting() -> Any:
+    """The splitting compiled to C with the derived stage map, or None without a usable C compiler."""
+    from ...solvers.kick_drift_c import compiled_splitting
+
+    def build():
+        from .rigid_model import h_free, h_kick, model
+
+        _, state, par = _symbols()
+        return model().stage_map, state, h_free, h_kick, par
+    return compiled_splitting("heavy_top", build)
+
+
 def _splitting_path(p: dict, w0: np.ndarray, q0: np.ndarray, t: np.ndarray, step: float,
-                    weights: tuple[float, ...], refine: int = 1) -> tuple[np.ndarray, np.ndarray, int]:
-    stage = _stage()
+                    weights: tuple[float, ...], refine: int = 1,
+                    compiled: Any = None) -> tuple[np.ndarray, np.ndarray, int]:
     inertia = np.array([p["I1"], p["I1"], p["I3"]])
     par = _param_values(p)
     y = [*(inertia * w0).tolist(), *q0.tolist()]
-    ys, n_total = [y], 0
-    for n, h in _interval_steps(t, step, refine):
-        y = kick_drift.propagate(stage, y, par, h, n, weights)
-        ys.append(y)
-        n_total += n
-    arr = np.array(ys)
+    intervals = _interval_steps(t, step, refine)
+    n_total = sum(n for n, _ in intervals)
+    if compiled is not None:
+        arr = compiled.propagate(y, par, intervals, weights)
+    else:
+        stage = _stage()
+        ys = [y]
+        for n, h in intervals:
+            y = kick_drift.propagate(stage, y, par, h, n, weights)
+            ys.append(y)
+        arr = np.array(ys)
     return arr[:, :3] / inertia, arr[:, 3:], n_total
 
 
 def _run_splitting(p: dict, w0: np.ndarray, q0: np.ndarray, t: np.ndarray, step: float, order: int,
-                   estimate_error: bool) -> HeavyTopTrajectory:
+                   estimate_error: bool, backend: str = "auto") -> HeavyTopTrajectory:
     weights = SPLITTING_ORDERS[order]
-    _stage()  # compile (once per process) outside the timed run
+    # compile (once per process) outside the timed run
+    compiled = None if backend == "python" else _compiled_splitting()
+    if compiled is None and backend == "c":
+        from ...solvers.dop853_c import unavailable_error
+        raise unavailable_error("kdk_heavy_top", "python")
+    if compiled is None:
+        _stage()
     start = time.perf_counter()
-    omega, q_raw, n_steps = _splitting_path(p, w0, q0, t, step, weights)
+    omega, q_raw, n_steps = _splitting_path(p, w0, q0, t, step, weights, compiled=compiled)
     wall = time.perf_counter() - start
     reference, kind, factor = None, "not requested", 1.0
     if estimate_error:
-        w_fine, q_fine, _ = _splitting_path(p, w0, q0, t, step, weights, refine=2)
+        w_fine, q_fine, _ = _splitting_path(p, w0, q0, t, step, weights, refine=2, compiled=compiled)
         reference, factor = (w_fine, q_fine), 2.0**order / (2.0**order - 1.0)
         kind = f"Richardson: max |y_h - y_(h/2)| · 2^{order}/(2^{order} - 1), y = ω and the orientation"
     n_stage = n_steps * kick_drift.stages_per_step(weights) + (len(t) - 1)
     return _finish(p, t, omega, q_raw, method="splitting", order=order, n_evaluations=n_stage, n_steps=n_steps,
-                   wall=wall, reference=reference, kind=kind, richardson=factor)
+                   wall=wall, reference=reference, kind=kind, richardson=factor,
+                   backend="python" if compiled is None else "c")
