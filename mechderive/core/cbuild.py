@@ -34,13 +34,16 @@ from typing import Callable
 from ..errors import MechDeriveError
 from . import codecache
 
-__all__ = ["compiler", "c_enabled", "set_c_enabled", "load_library", "CBuildError", "build_log"]
+__all__ = ["compiler", "c_enabled", "set_c_enabled", "load_library", "load_or_none", "why_unavailable", "CBuildError",
+           "build_log"]
 
 _FLAGS = ("-O2", "-fPIC", "-shared")
 _MEMORY: dict[str, ctypes.CDLL] = {}
 _LOCK = threading.Lock()
 _ENABLED: list[bool | None] = [None]
 _TMP: list[str] = []
+#: Why a library could not be built or loaded in this process, by name (see load_or_none).
+_FAILED: dict[str, str] = {}
 #: (name, 'built' | 'disk', seconds) for each library obtained in this process; seconds exclude the
 #: derivation that generating the source ran.
 _LOG: list[tuple[str, str, float]] = []
@@ -139,3 +142,25 @@ def load_library(name: str, build_source: Callable[[], str]) -> ctypes.CDLL:
         _MEMORY[name] = lib
         _LOG.append((name, how, time.perf_counter() - start))
         return lib
+
+
+def load_or_none(name: str, build_source: Callable[[], str]) -> ctypes.CDLL | None:
+    """:func:`load_library`, or None when the C path is off, no compiler is found, or building or
+    loading fails — the reason is kept for :func:`why_unavailable`, so callers can fall back to
+    their uncompiled path and a caller that insisted on C can say why it cannot have it."""
+    if not c_enabled():
+        return None
+    try:
+        return load_library(name, build_source)
+    except (CBuildError, OSError) as exc:  # a broken compiler or an unloadable file
+        _FAILED[name] = f"{type(exc).__name__}: {exc}"
+        return None
+
+
+def why_unavailable(name: str) -> str:
+    """Why :func:`load_or_none` gave None for the library ``name`` in this process."""
+    if name in _FAILED:
+        return _FAILED[name]
+    if compiler() is None:
+        return "no C compiler found (cc, gcc or clang on PATH, or $CC)"
+    return "the C path is switched off (MECHDERIVE_NO_C or set_c_enabled(False))"

@@ -257,16 +257,11 @@ class CompiledDOP853:
         return out, dict(nfev=int(stats[0]), steps=int(stats[1]), rejected=int(stats[2]))
 
 
-#: Why a stepper could not be built or loaded in this process, by name.
-_FAILED: dict[str, str] = {}
-
-
-def unavailable_error(name: str, fallback: str = "scipy") -> IntegrationError:
-    """The error for ``backend='c'`` when :func:`compiled_dop853` gave None for ``name``."""
-    why = _FAILED.get(name) or ("no C compiler found (cc, gcc or clang on PATH, or $CC)" if cbuild.compiler() is None
-                                else "the C path is switched off (MECHDERIVE_NO_C or set_c_enabled(False))")
-    return IntegrationError(f"expected a C compiler for backend='c', got none usable: {why}; "
-                            f"use backend='auto' or '{fallback}'")
+def unavailable_error(name: str, fallback: str = "scipy", *, kind: str = "dop853") -> IntegrationError:
+    """The error for ``backend='c'`` when the compiled ``kind`` ("dop853" here, "kdk" for
+    :mod:`.kick_drift_c`) of system ``name`` could not be had, with the reason."""
+    return IntegrationError(f"expected a C compiler for backend='c', got none usable: "
+                            f"{cbuild.why_unavailable(f'{kind}_{name}')}; use backend='auto' or '{fallback}'")
 
 
 def compiled_dop853(name: str, build: Callable[[], tuple[Any, Sequence[Any], Sequence[Any]]]) -> CompiledDOP853 | None:
@@ -276,18 +271,13 @@ def compiled_dop853(name: str, build: Callable[[], tuple[Any, Sequence[Any], Seq
     deriving with SymPy — only when the library is not in the cache.  The dimensions are recorded
     in the library itself (``dop853_dims``), so a cached library is used without deriving.
     """
-    if not cbuild.c_enabled():
-        return None
-
     def source() -> str:
         exprs, state, params = build()
         text = dop853_c_source(exprs, state, params, name=name)
         return text + f"\nvoid dop853_dims(int *out) {{ out[0] = {len(state)}; out[1] = {len(params)}; }}\n"
 
-    try:
-        lib = cbuild.load_library(f"dop853_{name}", source)
-    except (cbuild.CBuildError, OSError) as exc:  # a broken compiler or an unloadable file: fall back, and say why
-        _FAILED[name] = f"{type(exc).__name__}: {exc}"
+    lib = cbuild.load_or_none(f"dop853_{name}", source)
+    if lib is None:
         return None
     dims = (ctypes.c_int * 2)()
     lib.dop853_dims(dims)

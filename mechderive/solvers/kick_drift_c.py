@@ -105,11 +105,8 @@ def compiled_splitting(name: str, build: Callable[[], tuple]) -> CompiledSplitti
     ``build()`` returns (stage-map expressions, state symbols, h_drift symbol, h_kick symbol,
     parameter symbols) and runs — deriving — only when the library is not cached.
     """
-    if not cbuild.c_enabled():
-        return None
-    try:
-        lib = cbuild.load_library(f"kdk_{name}", lambda: _source(*build(), name=name))
-    except (cbuild.CBuildError, OSError):
+    lib = cbuild.load_or_none(f"kdk_{name}", lambda: _source(*build(), name=name))
+    if lib is None:
         return None
     dims = (ctypes.c_int * 2)()
     lib.kdk_dims(dims)

@@ -537,7 +537,7 @@ def _run_splitting(p: dict, w0: np.ndarray, q0: np.ndarray, t: np.ndarray, step:
     compiled = None if backend == "python" else _compiled_splitting()
     if compiled is None and backend == "c":
         from ...solvers.dop853_c import unavailable_error
-        raise unavailable_error("kdk_heavy_top", "python")
+        raise unavailable_error("heavy_top", "python", kind="kdk")
     if compiled is None:
         _stage()
     start = time.perf_counter()
