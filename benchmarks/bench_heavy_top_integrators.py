@@ -53,42 +53,26 @@ PERIOD = 3.5177  # nutation period (s), from the cubic (3.73); tests/test_heavy_
 PARAMS = dict(I1=1.0, I3=0.5, M=1.0, g=4.0, l=0.25)
 INITIAL = dict(theta=0.5, psi_dot=5.0)
 
+# The BASELINE user code (sympy.physics.mechanics → LagrangesMethod → lambdify(cse) → solve_ivp) is the
+# one `mechderive bench` times: mechderive.bench.work_precision._user_path, timing its own stages.
 USER_PATH = r'''
 import time, json, sys
-t0 = time.perf_counter()
 import numpy as np
-import sympy as sp
-from sympy.physics.mechanics import (LagrangesMethod, Lagrangian, Point, ReferenceFrame, RigidBody,
-                                     dynamicsymbols, inertia)
 from scipy.integrate import solve_ivp
-t1 = time.perf_counter()
-phi, theta, psi = dynamicsymbols("phi theta psi")
-I1, I3, M, g, l = sp.symbols("I1 I3 M g l", positive=True)
-N, B = ReferenceFrame("N"), ReferenceFrame("B")
-B.orient_body_fixed(N, (phi, theta, psi), "ZXZ")
-P = Point("P"); P.set_vel(N, 0)
-G = P.locatenew("G", l * B.z); G.v2pt_theory(P, N, B)
-top = RigidBody("top", G, B, M, (inertia(B, I1, I1, I3), P))        # inertia about the pivot
-top.potential_energy = M * g * G.pos_from(P).dot(N.z)
-LM = LagrangesMethod(Lagrangian(N, top), [phi, theta, psi]); LM.form_lagranges_equations()
-rhs = LM.rhs()
-t2 = time.perf_counter()
-qs = [phi, theta, psi]; us = [q.diff() for q in qs]
-f = sp.lambdify([*qs, *us, I1, I3, M, g, l], list(rhs), cse=True)
-t3 = time.perf_counter()
-def fun(_t, y):
-    return f(*y, 1.0, 0.5, 1.0, 1.0, 1.0)
+from mechderive.bench.work_precision import _user_path
+fun, stages = _user_path()
 def run(t, rtol):
-    sol = solve_ivp(fun, (t[0], t[-1]), [0, 0.5, 0, 0, 0, 5.0], method="DOP853", t_eval=t, rtol=rtol,
-                    atol=rtol / 100)
-    return sol
+    return solve_ivp(fun, (t[0], t[-1]), [0, 0.5, 0, 0, 0, 5.0], method="DOP853", t_eval=t, rtol=rtol,
+                     atol=rtol / 100)
 '''
 
 COLD_USER = USER_PATH + r'''
 t = np.linspace(0.0, float(sys.argv[1]), int(sys.argv[3]))
+t3 = time.perf_counter()
 sol = run(t, float(sys.argv[2]))
 t4 = time.perf_counter()
-print(json.dumps(dict(imports=t1 - t0, derive=t2 - t1, lambdify=t3 - t2, integrate=t4 - t3, nfev=int(sol.nfev))))
+print(json.dumps(dict(imports=stages["import_s"], derive=stages["derive_s"], lambdify=stages["lambdify_s"],
+                      integrate=t4 - t3, nfev=int(sol.nfev))))
 '''
 
 COLD_OURS = r'''
