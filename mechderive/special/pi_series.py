@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["PiSeries", "fit_pi_series"]
+__all__ = ["PiSeries", "fit_pi_series", "fit_pi_series_for_motion"]
 
 #: Samples per period tried for the fit; a series is accepted only if it has converged within M/4 terms.
 _SAMPLES = (128, 512)
@@ -85,3 +85,11 @@ def fit_pi_series(n: np.ndarray, sn_squared, K: float) -> PiSeries | None:
         k = np.arange(1, N + 1)
         return PiSeries(n=n, mean=spectrum[:, 0], sine=a[:, :N] * (K / (np.pi * k))[None, :], K=float(K))
     return None
+
+
+def fit_pi_series_for_motion(n: np.ndarray, m: float, m1: float, K: float) -> PiSeries | None:
+    """:func:`fit_pi_series` with sn² from :func:`mechderive.special.jacobi.jacobi_sn_cn_dn` at
+    parameter m (complement ``m1``, given as exactly as known) — what the closed-form tops use."""
+    from .jacobi import jacobi_sn_cn_dn
+
+    return fit_pi_series(n, lambda u: jacobi_sn_cn_dn(u, m, m1=m1)[0] ** 2, K)

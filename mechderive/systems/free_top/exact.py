@@ -210,12 +210,10 @@ class FreeTopSolution:
     def _pi_series(self):
         """The Fourier series of Π(n; am u | m) of this motion's precession (fitted once), or None."""
         if "pi_series" not in self._mp:
-            from ...special.jacobi import jacobi_sn_cn_dn
-            from ...special.pi_series import fit_pi_series
+            from ...special import pi_series
 
-            self._mp["pi_series"] = fit_pi_series(
-                np.array([self._orient.n]), lambda u: jacobi_sn_cn_dn(u, self.m, m1=self.m1)[0] ** 2,
-                self._period.hi / 4)
+            self._mp["pi_series"] = pi_series.fit_pi_series_for_motion(np.array([self._orient.n]), self.m, self.m1,
+                                                                       self._period.hi / 4)
         return self._mp["pi_series"]
 
     def _elliptic(self, t: np.ndarray):

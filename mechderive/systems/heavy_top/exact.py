@@ -425,12 +425,11 @@ class HeavyTopSolution:
         """The Fourier series of Π(n; am u | m) for the characteristics n± not close to 1 (fitted once
         per motion, after :func:`_angle_setup`), or None where it would converge too slowly."""
         if "pi_series" not in self._mp:
-            from ...special.jacobi import jacobi_sn_cn_dn
-            from ...special.pi_series import fit_pi_series
+            from ...special import pi_series
 
             ns = sorted(n for n, n1 in self._mp.get("one_minus_n", {}).items() if n1 >= 1e-3)
-            self._mp["pi_series"] = None if not ns or self._period is None else fit_pi_series(
-                np.array(ns), lambda u: jacobi_sn_cn_dn(u, self.m, m1=self.m1)[0] ** 2, self._period.hi / 2)
+            self._mp["pi_series"] = None if not ns or self._period is None else pi_series.fit_pi_series_for_motion(
+                np.array(ns), self.m, self.m1, self._period.hi / 2)
         return self._mp["pi_series"]
 
     @functools.cached_property
