@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import importlib
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, Callable, Iterable
 
 __all__ = ["Outcome", "Claim", "ClaimResult", "register", "all_claims", "run_claims", "print_claims", "perturb",

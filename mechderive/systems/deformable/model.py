@@ -45,7 +45,7 @@ from ...core.model import SymbolicModel, derived
 from ...core.symbols import state_symbol
 from ...errors import DerivationError, InvalidInputError, ShapeError
 from . import derivation
-from .derivation import apparent_momentum_symbols, evaluate_noncommutative, generic_antisymmetric, hat, vee
+from .derivation import apparent_momentum_symbols, evaluate_noncommutative, hat, vee
 
 __all__ = ["DeformableBody", "centred_positions"]
 

@@ -72,8 +72,8 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from ...core.validate import as_finite_array, check_positive
-from ...errors import InvalidInputError, ShapeError, UnphysicalInertiaError
+from ...core.validate import check_positive
+from ...errors import InvalidInputError, ShapeError
 from ...kinematics.conversions import euler_to_quaternion, quaternion_to_matrix
 from ...kinematics.rotations import continuous_euler_angles, euler_angles_from_matrix  # noqa: F401 (re-exported)
 from ...solvers import kick_drift
@@ -472,6 +472,15 @@ def _finish(p: dict, t: np.ndarray, omega: np.ndarray, q_raw: np.ndarray, *, met
                               wall_time=wall, backend=backend)
 
 
+def _scipy_rhs(args: tuple) -> Callable[[float, np.ndarray], list]:
+    """f(t, y) for solve_ivp: the compiled-to-Python (ω̇, q̇) at the parameter values ``args``."""
+    rhs = _rhs()
+
+    def fun(_t: float, y: np.ndarray) -> list:
+        return rhs(*y.tolist(), *args)
+    return fun
+
+
 def _run_dop853(p: dict, w0: np.ndarray, q0: np.ndarray, t: np.ndarray, rtol: float, atol: float,
                 estimate_error: bool, backend: str) -> HeavyTopTrajectory:
     args = tuple(_param_values(p))
@@ -480,12 +489,7 @@ def _run_dop853(p: dict, w0: np.ndarray, q0: np.ndarray, t: np.ndarray, rtol: fl
     if compiled is None and backend == "c":
         from ...solvers.dop853_c import unavailable_error
         raise unavailable_error("heavy_top", "scipy")
-    fun = None
-    if compiled is None:
-        rhs = _rhs()
-
-        def fun(_t: float, y: np.ndarray) -> list:
-            return rhs(*y.tolist(), *args)
+    fun = None if compiled is not None else _scipy_rhs(args)
 
     sol, wall, ref, kind = run_dop853(fun, t, y0, rtol, atol, reference=estimate_error, compiled=compiled,
                                       params=args)
