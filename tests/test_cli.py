@@ -222,7 +222,8 @@ def test_debug_variable_prints_the_traceback(monkeypatch, capsys, scene):
 
 
 @pytest.mark.parametrize("argv, message", [
-    (["-o", "{tmp}/missing/out.csv"], r"output file '.*missing/out\.csv': expected an existing directory, got '.*missing'"),
+    (["-o", "{tmp}/missing/out.csv"],
+     r"output file '.*missing/out\.csv': expected an existing directory, got '.*missing'"),
     (["-o", "{tmp}/out.txt"], r"output file '.*out\.txt': expected a suffix \.csv or \.npz, got '\.txt'"),
     (["-o", "{tmp}/dir.csv"], r"output file '.*dir\.csv': expected a file name, got a directory"),
     (["--plot", "{tmp}/out.jpg"], r"plot file '.*out\.jpg': expected a suffix \.png, \.pdf, \.svg, got '\.jpg'"),

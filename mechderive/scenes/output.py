@@ -120,7 +120,8 @@ def atomic_output(path: str | os.PathLike, *, what: str = "output file") -> Iter
     try:
         fd, tmp = _create_beside(path)
     except OSError as exc:
-        raise InvalidInputError(f"{what} {str(path)!r}: expected a writable location, got {exc.strerror or exc}") from exc
+        raise InvalidInputError(f"{what} {str(path)!r}: expected a writable location, "
+                                f"got {exc.strerror or exc}") from exc
     os.close(fd)
     try:
         yield tmp
