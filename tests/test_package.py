@@ -53,3 +53,53 @@ def test_derivation_script_runs(script: Path, monkeypatch, capsys):
 @pytest.mark.parametrize("script", SCRIPTS[:1], ids=[p.name for p in SCRIPTS[:1]])
 def test_derivation_script_latex(script: Path, monkeypatch, capsys):
     assert "\\begin{equation}" in _run_script(script, monkeypatch, capsys, "--latex")
+
+
+# Raises of built-in exception types that a user could meet, still to be turned into MechDeriveError
+# subclasses by their owners (issue 11).  The test fails on any raise not listed here, so the list
+# can only shrink; an entry whose raise is gone is simply unused.
+_BUILTIN_RAISES_TO_CONVERT = {
+    ("bench/__init__.py", "ValueError"), ("bench/_common.py", "RuntimeError"), ("bench/startup.py", "ValueError"),
+    ("catalog/registry.py", "ValueError"), ("core/codecache.py", "ValueError"), ("core/compile.py", "TypeError"),
+    ("solvers/kick_drift.py", "RuntimeError"), ("solvers/lie_poisson.py", "RuntimeError"),
+    ("stress/checks.py", "RuntimeError"), ("stress/heavy_cases.py", "ValueError"),
+    ("stress/long_cases.py", "RuntimeError"), ("stress/reference.py", "ValueError"),
+    ("systems/free_top/stability.py", "KeyError"),
+}
+_BUILTIN_EXCEPTIONS = {"ValueError", "TypeError", "RuntimeError", "ZeroDivisionError", "ArithmeticError",
+                       "OverflowError", "FloatingPointError", "KeyError", "IndexError", "LookupError",
+                       "AssertionError", "NotImplementedError", "Exception", "OSError"}
+
+
+def test_no_new_raise_of_a_builtin_exception():
+    """Every error that reaches a user is a MechDeriveError subclass; no `assert` validates input."""
+    import ast
+
+    package = ROOT / "mechderive"
+    found = []
+    for path in sorted(package.rglob("*.py")):
+        rel = path.relative_to(package).as_posix()
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Assert):
+                found.append(f"{rel}:{node.lineno}: assert (removed by python -O)")
+            elif isinstance(node, ast.Raise) and node.exc is not None:
+                exc = node.exc.func if isinstance(node.exc, ast.Call) else node.exc
+                name = exc.id if isinstance(exc, ast.Name) else None
+                if name in _BUILTIN_EXCEPTIONS and (rel, name) not in _BUILTIN_RAISES_TO_CONVERT:
+                    found.append(f"{rel}:{node.lineno}: raise {name}")
+    assert not found, "raise a mechderive.errors class instead:\n" + "\n".join(found)
+
+
+def test_former_value_errors_are_mechderive_errors():
+    import mpmath
+    import sympy as sp
+
+    from mechderive.core.symbols import coordinate, t, to_state_symbols
+    from mechderive.errors import InvalidInputError
+    from mechderive.special.highprec import complete_pi_mp
+
+    with pytest.raises(InvalidInputError, match=r"expected n < 1 and 0 < m1 <= 1, got n = 2\.0, m1 = 0\.5"):
+        complete_pi_mp(mpmath.mpf(2), mpmath.mpf("0.5"))
+    with pytest.raises(InvalidInputError, match=r"expected derivatives of order <= 2, got order 3 in "):
+        to_state_symbols(sp.diff(coordinate("phi"), t, 3))
+    assert issubclass(InvalidInputError, ValueError)  # callers catching ValueError keep working

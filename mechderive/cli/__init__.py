@@ -1,21 +1,57 @@
-"""The ``mechderive`` command line: ``run``, ``scenes``, ``verify``, ``derive``, ``check``, ``bench``, ``stress``."""
+"""The ``mechderive`` command line: ``run``, ``scenes``, ``verify``, ``derive``, ``check``, ``bench``, ``stress``.
+
+Options may come before, between or after a subcommand's positional arguments
+(``mechderive derive heavy_top --format latex lagrangian``): :func:`main` hands
+everything after the subcommand's name to that subcommand's parser through
+``argparse``'s ``parse_intermixed_args``.
+
+Exit status (the same for every subcommand; some add their own, e.g. ``check``'s 3):
+
+====  =====================================================================================
+0     success
+1     a check that was run did not pass (``verify``, ``stress``; ``check``: false)
+2     bad input: a usage error, or a :class:`~mechderive.errors.MechDeriveError`, printed
+      as one line ``mechderive: error: <what was wrong and what is allowed>``
+70    an internal error (a bug): one line naming the exception (EX_SOFTWARE of sysexits.h)
+130   interrupted by Ctrl-C (128 + SIGINT, what a shell reports for a process killed by it)
+141   stdout was closed early, e.g. ``mechderive run --json | head -1`` (128 + SIGPIPE)
+====  =====================================================================================
+
+No traceback is printed for any of these unless ``MECHDERIVE_DEBUG=1`` is set in the
+environment.  A closed pipe exits silently with 141, as ``cat`` or ``seq`` killed by
+SIGPIPE do, rather than 0: the output was cut short, and for ``verify`` or ``stress``
+the remaining checks never ran, so success would be a claim the run cannot make
+(``set -o pipefail`` scripts treat it as they treat any other Unix tool).  SIGPIPE
+is not restored to its default action instead, because a signal would kill the run
+before it can remove the temporary file of an output being written.
+"""
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from typing import Sequence
 
 from .. import __version__
 from ..errors import MechDeriveError
 
-__all__ = ["main", "build_parser"]
+__all__ = ["main", "build_parser", "parse_args", "EXIT_INPUT", "EXIT_INTERNAL", "EXIT_INTERRUPTED", "EXIT_PIPE"]
+
+EXIT_INPUT = 2
+EXIT_INTERNAL = 70
+EXIT_INTERRUPTED = 130
+EXIT_PIPE = 141
+
+_DEBUG_VARIABLE = "MECHDERIVE_DEBUG"
 
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="mechderive",
         description="Derive, verify and simulate the motion of rigid bodies.",
+        epilog=f"Exit status: 0 success, 1 a check did not pass, 2 bad input, 70 internal error, "
+               f"130 interrupted, 141 output pipe closed.  {_DEBUG_VARIABLE}=1 prints tracebacks.",
     )
     parser.add_argument("--version", action="version", version=f"mechderive {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
@@ -33,18 +69,112 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``mechderive`` console script; returns the exit status."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    if args.command is None:
-        parser.print_help()
-        return 0
+def _subcommand_parsers(parser: argparse.ArgumentParser) -> dict[str, argparse.ArgumentParser]:
+    """The parser of each subcommand of ``parser``, by name."""
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            return dict(action.choices)
+    return {}
+
+
+def parse_args(parser: argparse.ArgumentParser, argv: Sequence[str]) -> argparse.Namespace:
+    """Parse ``argv`` with options allowed anywhere among a subcommand's positionals.
+
+    argparse's own subcommand dispatch parses the rest of the line in one pass, which
+    fills all positionals from the first run of them (``derive heavy_top --format latex
+    lagrangian`` leaves ``lagrangian`` unrecognised).  So the subcommand's parser is
+    called directly with ``parse_intermixed_args``; top-level options (``--help``,
+    ``--version``) and unknown commands go through ``parser`` as usual.
+    """
+    argv = list(argv)
+    commands = _subcommand_parsers(parser)
+    if argv and argv[0] in commands:
+        return commands[argv[0]].parse_intermixed_args(argv[1:], argparse.Namespace(command=argv[0]))
+    return parser.parse_args(argv)
+
+
+def _debug() -> bool:
+    return os.environ.get(_DEBUG_VARIABLE, "") not in ("", "0")
+
+
+def _say(line: str) -> None:
+    """One line on stderr, which may itself be closed."""
     try:
-        return int(args.run(args) or 0)
+        print(line, file=sys.stderr, flush=True)
+    except (OSError, ValueError):
+        pass
+
+
+def _traceback_if_debugging() -> None:
+    if _debug():
+        import traceback
+
+        traceback.print_exc()
+
+
+def _stdout_to_devnull() -> None:
+    """Point stdout's file descriptor at /dev/null, so that the flush at exit cannot fail again.
+
+    The recipe of the Python documentation ("Note on SIGPIPE", module signal).  When stdout
+    is not a real file (a test capturing it), there is nothing to redirect.
+    """
+    try:
+        fd = sys.stdout.fileno()
+    except (AttributeError, OSError, ValueError):
+        return
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(devnull, fd)
+    finally:
+        os.close(devnull)
+
+
+def _flush_stdout_quietly() -> None:
+    """Flush what an interrupted or failed command left in stdout's buffer; a closed pipe is no error here."""
+    try:
+        sys.stdout.flush()
+    except BrokenPipeError:
+        _stdout_to_devnull()
+    except (OSError, ValueError):
+        pass
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``mechderive`` console script; returns the exit status (module docstring)."""
+    try:
+        parser = build_parser()
+        args = parse_args(parser, sys.argv[1:] if argv is None else argv)
+        if args.command is None:
+            parser.print_help()
+            status = 0
+        else:
+            status = int(args.run(args) or 0)
+        # A reader that went away shows here rather than in the interpreter's final flush,
+        # where it could only be reported as "Exception ignored" with exit status 120.
+        sys.stdout.flush()
+        return status
     except MechDeriveError as exc:
-        print(f"mechderive: error: {exc}", file=sys.stderr)
-        return 2
+        _flush_stdout_quietly()
+        _traceback_if_debugging()
+        _say(f"mechderive: error: {exc}")
+        return EXIT_INPUT
+    except KeyboardInterrupt:
+        _flush_stdout_quietly()
+        _traceback_if_debugging()
+        _say("mechderive: interrupted")
+        return EXIT_INTERRUPTED
+    except BrokenPipeError:
+        _traceback_if_debugging()
+        _stdout_to_devnull()
+        return EXIT_PIPE
+    except Exception as exc:  # noqa: BLE001 - the last resort: a bug, said in one line
+        _flush_stdout_quietly()
+        _traceback_if_debugging()
+        message = str(exc).strip().splitlines()[0] if str(exc).strip() else "(no message)"
+        hint = "" if _debug() else f"; {_DEBUG_VARIABLE}=1 shows the traceback"
+        _say(f"mechderive: internal error: {type(exc).__name__}: {message} -- this is a bug in mechderive, "
+             f"please report it to its maintainers with the command line{hint}")
+        return EXIT_INTERNAL
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -1,3 +1,5 @@
+"""``python -m mechderive.cli``: the same as ``python -m mechderive``."""
+
 import sys
 
 from . import main

@@ -39,17 +39,24 @@ def run(args: argparse.Namespace) -> int:
     if args.plot and sections is not None and not ({"heavy_top", "free_top"} & set(sections)):
         raise InvalidInputError("--plot: expected heavy_top or free_top among the sections, got neither")
     if args.plot:
-        try:
-            import matplotlib  # noqa: F401
-        except ImportError as exc:
-            raise InvalidInputError("--plot needs matplotlib: pip install 'mechderive[plot]'") from exc
+        import importlib.util
+
+        from ..scenes.output import check_output_path
+        from ..scenes.plot import PLOT_SUFFIXES
+
+        check_output_path(args.plot, PLOT_SUFFIXES, what="plot file")  # before minutes of benchmarks
+        if importlib.util.find_spec("matplotlib") is None:
+            raise InvalidInputError("--plot needs matplotlib: pip install 'mechderive[plot]'")
 
     def log(msg: str) -> None:
         print(msg, file=sys.stderr, flush=True)
 
     result = run_benchmarks(quick=args.quick, sections=sections, log=log)
     if args.plot:
-        plot_work_precision(result, args.plot)
+        from ..scenes.output import atomic_output
+
+        with atomic_output(args.plot, what="plot file") as tmp:  # the figure's format follows tmp's suffix
+            plot_work_precision(result, str(tmp))
         result["meta"]["plot"] = args.plot
     if args.json:
         print(json.dumps(result, indent=1, default=str))

@@ -52,6 +52,22 @@ _PLOT_NEEDS = {"heavy_top": ("theta", "apex_x", "apex_y", "apex_z"), "free_top":
                "falling_cat": ("flip_angle",)}
 
 
+def _check_targets(args: argparse.Namespace) -> None:
+    """Refuse an output or plot file that could not be written before solving, not after."""
+    from ..scenes.output import TABLE_SUFFIXES, check_output_path
+
+    if args.output:
+        check_output_path(args.output, TABLE_SUFFIXES)
+    if args.plot:
+        import importlib.util
+
+        from ..scenes.plot import PLOT_SUFFIXES
+
+        check_output_path(args.plot, PLOT_SUFFIXES, what="plot file")
+        if importlib.util.find_spec("matplotlib") is None:
+            raise InvalidInputError("--plot needs matplotlib: pip install 'mechderive[plot]'")
+
+
 def run(args: argparse.Namespace) -> int:
     from ..core import codecache
     from ..scenes.planner import run_scene
@@ -60,6 +76,7 @@ def run(args: argparse.Namespace) -> int:
     if args.no_cache:
         codecache.set_disk_cache(False)
     start = time.perf_counter()
+    _check_targets(args)
     scene = _load(args.scene)
     parse_s = time.perf_counter() - start
     solve_scene = scene

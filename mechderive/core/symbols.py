@@ -14,6 +14,8 @@ from typing import Any
 
 import sympy as sp
 
+from ..errors import InvalidInputError
+
 __all__ = ["t", "coordinate", "euler_angles", "state_symbol", "to_state_symbols"]
 
 #: The time symbol.
@@ -53,7 +55,7 @@ def to_state_symbols(expr: Any) -> Any:
         if isinstance(d.expr, sp.core.function.AppliedUndef) and d.variables and set(d.variables) == {t}:
             order = len(d.variables)
             if order not in _SUFFIX:
-                raise ValueError(f"expected derivatives of order <= 2, got order {order} in {d}")
+                raise InvalidInputError(f"expected derivatives of order <= 2, got order {order} in {d}")
             subs[d] = state_symbol(d.expr.func.__name__ + _SUFFIX[order])
     # Derivatives first, so that q(t) inside them is not replaced first.
     expr = expr.subs(subs)

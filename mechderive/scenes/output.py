@@ -9,8 +9,10 @@ Tables (:func:`write_table`) are chosen by the file's suffix:
   ``nan``, ``inf``, ``-inf``, which ``np.loadtxt`` reads;
 - ``.npz``: one float64 array named ``t`` and one per quantity (``np.load``).
 
-The file is written to a temporary name beside the target and renamed into place,
-so an interrupted run never leaves a half-written table under the final name.
+The file is written to a temporary name beside the target and renamed into place
+(:func:`atomic_output`), so a failed or interrupted run never leaves a half-written
+table under the final name, nor a temporary file.  :func:`check_output_path` checks
+a target (suffix, directory) before the work that fills it starts.
 
 Reports (:func:`report_json`) are JSON with sorted keys.  JSON has no NaN or
 infinity; non-finite floats are written as the *strings* ``"NaN"``, ``"Infinity"``
@@ -28,20 +30,21 @@ and ``"-Infinity"`` (every one, wherever it occurs), which ``float()`` reads bac
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
 import re
-import tempfile
+import secrets
 import zipfile
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, Iterator, Mapping, Sequence
 
 import numpy as np
 
 from ..errors import InvalidInputError, ShapeError
 
-__all__ = ["TABLE_SUFFIXES", "write_table", "report_json"]
+__all__ = ["TABLE_SUFFIXES", "write_table", "report_json", "check_output_path", "atomic_output"]
 
 TABLE_SUFFIXES = (".csv", ".npz")
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
@@ -68,18 +71,72 @@ def _check_columns(t: Any, columns: Mapping[str, Any]) -> tuple[np.ndarray, dict
     return times.astype(np.float64), out
 
 
-def _write_atomically(path: Path, write: Any) -> None:
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            write(f)
-        os.replace(tmp, path)
-    except BaseException:
+def check_output_path(path: str | os.PathLike, suffixes: Sequence[str], *, what: str = "output file") -> Path:
+    """``path`` as a :class:`~pathlib.Path` if a file of one of the ``suffixes`` can be written there.
+
+    Checked before any work is done, so that a long run does not end in a refusal: the
+    suffix (case-insensitive), that the directory exists and is writable, and that
+    ``path`` is not itself a directory.  ``what`` names the file in the message.
+    Raises :class:`~mechderive.errors.InvalidInputError` otherwise.
+    """
+    path = Path(path)
+    shown = f"{what} {str(path)!r}"
+    if path.suffix.lower() not in suffixes:
+        allowed = " or ".join(suffixes) if len(suffixes) == 2 else ", ".join(suffixes)
+        raise InvalidInputError(f"{shown}: expected a suffix {allowed}, got {path.suffix or 'none'!r}")
+    parent = path.parent
+    if not parent.is_dir():
+        raise InvalidInputError(f"{shown}: expected an existing directory, got {str(parent)!r}")
+    if path.is_dir():
+        raise InvalidInputError(f"{shown}: expected a file name, got a directory")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise InvalidInputError(f"{shown}: expected a directory you can write to, got {str(parent)!r}")
+    return path
+
+
+def _create_beside(path: Path) -> tuple[int, Path]:
+    # Like tempfile.mkstemp, but with mode 0o666 so that the umask applies: the renamed file gets
+    # the permissions a plainly written one would (mkstemp's 0o600 would make every table private).
+    for _ in range(100):
+        tmp = path.with_name(f".{path.stem}.{secrets.token_hex(4)}.tmp{path.suffix}")
         try:
+            return os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666), tmp
+        except FileExistsError:
+            continue
+    raise FileExistsError(f"no free temporary name beside {str(path)!r}")  # pragma: no cover
+
+
+@contextlib.contextmanager
+def atomic_output(path: str | os.PathLike, *, what: str = "output file") -> Iterator[Path]:
+    """A temporary file beside ``path``, renamed onto ``path`` when the ``with`` block ends normally.
+
+    The temporary file has ``path``'s suffix (so writers that infer the format from the
+    name work) and is removed when the block raises, also on Ctrl-C: ``path`` is never left
+    half-written, and an existing ``path`` is kept until the new file is complete.
+    An :class:`OSError` while writing (disk full, no permission) becomes
+    :class:`~mechderive.errors.InvalidInputError` naming the file.
+    """
+    path = Path(path)
+    try:
+        fd, tmp = _create_beside(path)
+    except OSError as exc:
+        raise InvalidInputError(f"{what} {str(path)!r}: expected a writable location, "
+                                f"got {exc.strerror or exc}") from exc
+    os.close(fd)
+    try:
+        yield tmp
+        os.replace(tmp, path)
+    except BaseException as exc:
+        with contextlib.suppress(OSError):
             os.unlink(tmp)
-        except OSError:
-            pass
+        if isinstance(exc, OSError) and not isinstance(exc, BrokenPipeError):
+            raise InvalidInputError(f"{what} {str(path)!r}: could not write it: {exc.strerror or exc}") from exc
         raise
+
+
+def _write_atomically(path: Path, write: Any) -> None:
+    with atomic_output(path) as tmp, open(tmp, "wb") as f:
+        write(f)
 
 
 def _write_npz(f: Any, arrays: Mapping[str, np.ndarray]) -> None:
@@ -97,15 +154,9 @@ def write_table(path: str | os.PathLike, t: Any, columns: Mapping[str, Any]) -> 
     The format follows the suffix, ``.csv`` or ``.npz`` (see the module docstring);
     any other suffix is refused.  Returns the path written.
     """
-    path = Path(path)
+    path = check_output_path(path, TABLE_SUFFIXES)
     suffix = path.suffix.lower()
-    if suffix not in TABLE_SUFFIXES:
-        raise InvalidInputError(f"output file {str(path)!r}: expected a suffix {' or '.join(TABLE_SUFFIXES)}, "
-                                f"got {path.suffix or 'none'!r}")
     times, cols = _check_columns(t, columns)
-    if not path.parent.is_dir():
-        raise InvalidInputError(f"output file {str(path)!r}: expected an existing directory, "
-                                f"got {str(path.parent)!r}")
     if suffix == ".npz":
         _write_atomically(path, lambda f: _write_npz(f, {"t": times, **cols}))
         return path

@@ -13,6 +13,8 @@
   ω3 against t;
 - ``falling_cat``: the flip angle against t, from ``flip_angle``.
 
+The picture is written to a temporary file renamed into place
+(:func:`mechderive.scenes.output.atomic_output`): never half a file under ``path``.
 matplotlib is imported inside :func:`plot_scene` only, and used through its
 object interface with the Agg canvas: no pyplot, no change to the caller's
 backend or global figure list.
@@ -28,6 +30,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from ..errors import InvalidInputError, ShapeError
+from .output import atomic_output, check_output_path
 
 __all__ = ["PLOT_SUFFIXES", "REQUIRED_DATA", "plot_scene"]
 
@@ -150,10 +153,7 @@ def plot_scene(system: str, data: Mapping[str, Any], path: str | os.PathLike, *,
     Figure, FigureCanvasAgg = _import_matplotlib()
     if system not in REQUIRED_DATA:
         raise InvalidInputError(f"expected a system, one of {', '.join(REQUIRED_DATA)}, got {system!r}")
-    path = Path(path)
-    if path.suffix.lower() not in PLOT_SUFFIXES:
-        raise InvalidInputError(f"plot file {str(path)!r}: expected a suffix {', '.join(PLOT_SUFFIXES)}, "
-                                f"got {path.suffix or 'none'!r}")
+    path = check_output_path(path, PLOT_SUFFIXES, what="plot file")
     extra = {} if extra is None else extra
     if not isinstance(extra, Mapping) or any(k not in _EXTRA_KEYS for k in extra):
         raise InvalidInputError(f"expected `extra` to be a mapping with keys among {', '.join(_EXTRA_KEYS)}, "
@@ -171,5 +171,6 @@ def plot_scene(system: str, data: Mapping[str, Any], path: str | os.PathLike, *,
     else:
         _falling_cat(fig, d)
     fig.suptitle(title)
-    fig.savefig(path, dpi=110)
+    with atomic_output(path, what="plot file") as tmp:
+        fig.savefig(tmp, dpi=110, format=path.suffix.lower()[1:])
     return path

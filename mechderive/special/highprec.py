@@ -19,6 +19,8 @@ from __future__ import annotations
 
 import mpmath
 
+from ..errors import InvalidInputError
+
 __all__ = ["complete_pi_mp"]
 
 
@@ -31,7 +33,7 @@ def complete_pi_mp(n, m1):
     """
     n, m1 = mpmath.mpf(n), mpmath.mpf(m1)
     if not n < 1 or not 0 < m1 <= 1:
-        raise ValueError(f"expected n < 1 and 0 < m1 <= 1, got n = {n}, m1 = {m1}")
+        raise InvalidInputError(f"expected n < 1 and 0 < m1 <= 1, got n = {n}, m1 = {m1}")
     qc = mpmath.sqrt(m1)
     p = mpmath.sqrt(1 - n)
     a, b = mpmath.mpf(1), 1 / p
