@@ -16,6 +16,8 @@ __all__ = [
     "UnphysicalInertiaError",
     "DerivationError",
     "IntegrationError",
+    "ArgumentError",
+    "BenchmarkError",
 ]
 
 
@@ -43,9 +45,17 @@ class UnphysicalInertiaError(InvalidInputError):
     """Moments of inertia that no body can have (negative, or violating I1 + I2 >= I3)."""
 
 
+class ArgumentError(InvalidInputError, TypeError):
+    """A function was called with the wrong number or kind of arguments."""
+
+
 class DerivationError(MechDeriveError, RuntimeError):
     """A symbolic derivation did not produce what it must (an internal consistency failure)."""
 
 
 class IntegrationError(MechDeriveError, RuntimeError):
     """An ODE solver failed (e.g. a torque that blows the solution up)."""
+
+
+class BenchmarkError(MechDeriveError, RuntimeError):
+    """A timed benchmark run (a subprocess of ``mechderive bench``) failed."""

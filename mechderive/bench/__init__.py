@@ -26,6 +26,7 @@ import tempfile
 import time
 from typing import Callable
 
+from ..errors import InvalidInputError
 from .report import check_targets, format_report, plot_work_precision
 
 __all__ = ["run_benchmarks", "format_report", "plot_work_precision", "check_targets", "SECTIONS"]
@@ -63,7 +64,7 @@ def run_benchmarks(*, quick: bool = False, sections: tuple[str, ...] | None = No
         sections = tuple(s for s in SECTIONS if not (quick and s == "laziness"))
     unknown = [s for s in sections if s not in SECTIONS]
     if unknown:
-        raise ValueError(f"expected sections among {', '.join(SECTIONS)}, got {unknown[0]!r}")
+        raise InvalidInputError(f"expected sections among {', '.join(SECTIONS)}, got {unknown[0]!r}")
     say = log or (lambda _msg: None)
     seconds: dict[str, float] = {}
     clock = [time.perf_counter()]

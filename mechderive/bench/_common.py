@@ -16,6 +16,8 @@ import time
 from pathlib import Path
 from typing import Any, Callable, Sequence
 
+from ..errors import BenchmarkError
+
 __all__ = ["median_time", "row", "nearest_error_speedups", "python_subprocess", "package_env"]
 
 
@@ -83,5 +85,5 @@ def python_subprocess(args: Sequence[str], env: dict, *, timeout: float = 600) -
     proc = subprocess.run([sys.executable, *args], env=env, capture_output=True, text=True, timeout=timeout)
     wall = time.perf_counter() - start
     if proc.returncode != 0:
-        raise RuntimeError(f"benchmark subprocess failed (exit {proc.returncode}): {proc.stderr.strip()[-2000:]}")
+        raise BenchmarkError(f"benchmark subprocess failed (exit {proc.returncode}): {proc.stderr.strip()[-2000:]}")
     return wall, proc.stdout, proc.stderr

@@ -21,6 +21,7 @@ import statistics
 import tempfile
 from pathlib import Path
 
+from ..errors import InvalidInputError
 from ._common import package_env, python_subprocess
 
 __all__ = ["cold_start", "laziness", "ALL_HEAVY_QUANTITIES"]
@@ -90,7 +91,7 @@ def _interpreter_start() -> float:
 def cold_start(cache: str, *, quick: bool = False) -> dict:
     """``mechderive run --json`` (default scene) with the empty cache directory ``cache``, then warm runs on it."""
     if Path(cache).exists() and any(Path(cache).iterdir()):
-        raise ValueError(f"expected an empty cache directory for the cold run, got {cache!r} with files in it")
+        raise InvalidInputError(f"expected an empty cache directory for the cold run, got {cache!r} with files in it")
     cold = _run_cli(["run", "--json"], MECHDERIVE_CACHE_DIR=cache)
     warm = _warm_runs(["run", "--json"], 1 if quick else 3, cache)
     return dict(interpreter_start=_interpreter_start(), cold=cold, warm=warm)

@@ -34,6 +34,8 @@ import time
 from pathlib import Path
 from typing import Any, Callable, Sequence
 
+from ..errors import InvalidInputError
+
 __all__ = ["cached_lambdify", "cache_dir", "fingerprint", "set_disk_cache", "disk_cache_enabled",
            "compile_log", "clear_memory"]
 
@@ -178,7 +180,7 @@ def cached_lambdify(name: str, build: Callable[[], tuple[Sequence[Any], Any]], *
     ``args`` (the argument names, comma-separated).
     """
     if module not in _MODULES:
-        raise ValueError(f"expected module one of {_MODULES}, got {module!r}")
+        raise InvalidInputError(f"expected module one of {_MODULES}, got {module!r}")
     key = f"{name}|{module}"
     with _LOCK:
         hit = _MEMORY.get(key)

@@ -17,6 +17,8 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
+from ..errors import ArgumentError
+
 __all__ = ["compile_expressions", "compile_cached", "compile_scalar", "compile_cache_info", "clear_compile_cache"]
 
 _CACHE: dict[str, Callable[..., Any]] = {}
@@ -88,7 +90,7 @@ def wrap_vectorised(raw: Callable[..., Any], arg_names: Sequence[str], shape: tu
 
     def compiled(*values: Any) -> np.ndarray:
         if len(values) != nargs:
-            raise TypeError(f"{name}() expected {nargs} arguments ({', '.join(arg_names)}), got {len(values)}")
+            raise ArgumentError(f"{name}() expected {nargs} arguments ({', '.join(arg_names)}), got {len(values)}")
         vals = [np.asarray(v, dtype=float) for v in values]
         out = raw(*vals)
         bshape = np.broadcast_shapes(*(v.shape for v in vals)) if vals else ()

@@ -40,6 +40,7 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
+from ..errors import DerivationError
 from .composition import merged_sequence
 
 __all__ = ["kdk_schedule", "stages_per_step", "propagate", "propagate_ensemble"]
@@ -56,7 +57,7 @@ def kdk_schedule(weights: Sequence[float]) -> tuple[float, list[tuple[float, flo
     seq = merged_sequence(tuple(float(w) for w in weights), 2)
     (p0, head), rest = seq[0], seq[1:]
     if p0 != 0 or len(rest) % 2:  # pragma: no cover - guaranteed by merged_sequence
-        raise RuntimeError("expected a kick first and (drift, kick) pairs after it")
+        raise DerivationError("expected a kick first and (drift, kick) pairs after it")
     stages = [(rest[i][1], rest[i + 1][1]) for i in range(0, len(rest), 2)]
     return head, stages
 

@@ -37,6 +37,7 @@ from typing import Sequence
 
 import numpy as np
 
+from ..errors import DerivationError
 from .composition import merged_sequence
 
 __all__ = ["step_schedule", "propagate", "propagate_ensemble", "subflows_per_step"]
@@ -57,7 +58,7 @@ def step_schedule(weights: Sequence[float]) -> tuple[list[tuple[int, float]], li
     seq = merged_sequence(tuple(weights), 3)
     (a0, head), (a1, tail) = seq[0], seq[-1]
     if a0 != 0 or a1 != 0:  # pragma: no cover - guaranteed by merged_sequence
-        raise RuntimeError("expected the composed step to start and end with axis 0")
+        raise DerivationError("expected the composed step to start and end with axis 0")
     return head, seq[1:-1], tail  # type: ignore[return-value]
 
 

@@ -22,6 +22,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from ..errors import DerivationError
 from .core import Collector
 from .reference import RefRun
 
@@ -140,7 +141,7 @@ def heavy_scenes(col: Collector, params: dict, initial: dict, t: np.ndarray, ref
         scene = Scene(system="heavy_top", method=method, rtol=rtol, parameters=dict(params),
                       initial=full_initial(initial), t_end=float(t[-1]), samples=len(t), quantities=quantities)
         if not np.array_equal(scene.times(), t):
-            raise RuntimeError("the scene's sample times differ from the reference's")
+            raise DerivationError("the scene's sample times differ from the reference's")
         res = col.attempt(label, "run_scene", lambda: run_scene(scene))
         if res is None:
             continue

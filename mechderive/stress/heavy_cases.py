@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from ..errors import UnphysicalInertiaError
+from ..errors import InvalidInputError, UnphysicalInertiaError
 from .checks import (CF_TOL, INT_TOL, TOP, heavy_closed_form, heavy_integrators, heavy_scenes)
 from .core import Case, Collector
 from .reference import heavy_reference
@@ -41,7 +41,7 @@ def precession_rates(params: dict, theta0: float, omega3: float) -> tuple[float,
     p3 = params["I3"] * omega3
     disc = p3 * p3 - 4 * params["I1"] * mgl * c
     if disc < 0:
-        raise ValueError(f"expected ω3 above (3.81)'s bound, got discriminant {disc:g}")
+        raise InvalidInputError(f"expected ω3 above (3.81)'s bound, got discriminant {disc:g}")
     big = p3 + math.sqrt(disc)
     return 2 * mgl / big, big / (2 * params["I1"] * c)
 

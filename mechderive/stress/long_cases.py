@@ -19,6 +19,7 @@ import numpy as np
 
 from .checks import CF_TOL, TOP
 from .core import Case, Collector
+from ..errors import DerivationError
 from .reference import (DPS, euler_angles, euler_matrix, find_root, free_initial_state, free_top_field,
                         free_top_period, heavy_initial_state, heavy_top_field, integrate, matrix, monodromy_power)
 
@@ -87,7 +88,7 @@ def _long_heavy(init: dict):
                         break
                 prev = d
             if len(signs) < 2:
-                raise RuntimeError("expected two sign changes of dR33/dt within t = 20")
+                raise DerivationError("expected two sign changes of dR33/dt within t = 20")
             T = find_root(lambda s: sol.derivative(s, 3 + 8), signs[1])
             fine = [T * k / 400 for k in range(401)]
             track = [euler_angles(sol(0))]

@@ -31,6 +31,8 @@ from typing import Callable, Sequence
 import mpmath
 import numpy as np
 
+from ..errors import InvalidInputError
+
 __all__ = ["DPS", "TaylorSolution", "RefRun", "free_top_field", "heavy_top_field", "integrate", "heavy_initial_state",
            "free_initial_state", "euler_matrix", "euler_angles", "matrix", "monodromy_power", "free_top_m1",
            "free_top_period", "find_root", "sample", "heavy_reference", "free_reference"]
@@ -160,7 +162,7 @@ class TaylorSolution:
         """y(t) (t ≥ 0, an mpf or a float taken exactly), integrating on if needed."""
         t = mpf(t)
         if t < 0:
-            raise ValueError(f"expected t >= 0, got {t}")
+            raise InvalidInputError(f"expected t >= 0, got {t}")
         self.extend(t)
         k = _bisect(self.starts, t)
         h, c = self.steps[k]

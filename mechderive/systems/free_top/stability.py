@@ -44,7 +44,7 @@ from typing import Any
 import numpy as np
 
 from ...core.validate import as_finite_array
-from ...errors import InvalidInputError
+from ...errors import DerivationError, InvalidInputError
 from ...inertia.validate import check_principal_moments
 from . import model as _model
 
@@ -76,7 +76,7 @@ def _compiled(name: str):
     if name == "axis_growth_rate_squared":  # A_a / I_b with A_1 = A of (3.44)
         exprs = [m.axis_stability_coefficients[a] / moments[_model.cyclic_axes(a + 1)[1]] for a in range(3)]
         return m.compile("axis_growth_rate_squared", exprs, moments + [_model.Omega])
-    raise KeyError(name)  # pragma: no cover - internal
+    raise DerivationError(f"no stability function {name!r}")  # pragma: no cover - internal
 
 
 def _steadiness(moments: np.ndarray, omega: np.ndarray) -> float:
