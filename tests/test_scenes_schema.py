@@ -176,7 +176,7 @@ def test_scene_is_frozen():
 
 @pytest.mark.parametrize("doc, error, message", [
     (heavy(colour="red"), InvalidInputError,
-     r"scene key colour: unknown key; expected top-level keys name, system, method, rtol and tables "
+     r"scene key colour: unknown key; expected top-level keys name, system, method, rtol, strict and tables "
      r"\[parameters\], \[initial\], \[time\], \[output\]"),
     (heavy(extras={"a": 1}), InvalidInputError,
      r"scene table \[extras\]: unknown table; expected one of \[parameters\], \[initial\], \[time\], \[output\]"),

@@ -121,8 +121,8 @@ def _violations(v: dict[str, np.ndarray], rtol: float) -> list[str]:
     if "Mgl" in v:
         bad = v["I1"] < v["I3"] / 2 - rtol * v["I1"]
         if np.any(bad):
-            return ["expected I1 >= I3/2 (with M g l given as Mgl, a body exists iff the triangle inequality about "
-                    "the centre of mass, I1 - M l² >= I3/2, can hold for small l), "
+            return ["expected I1 >= I3/2 (given M g l alone, a body exists iff the triangle inequality about the "
+                    "centre of mass, I1 - M l² >= I3/2, holds for some small l), "
                     f"got I1 = {_first(v['I1'], bad):.6g} < I3/2 = {_first(v['I3'] / 2, bad):.6g}"]
         return []
     I1_cm = v["I1"] - v["M"] * v["l"] ** 2
@@ -169,7 +169,7 @@ def rigid_body_violations(params: Mapping[str, Any], *, rtol: float = 1e-9) -> l
     """What ``strict=False`` waives for ``params`` (checked otherwise as by :func:`check_params`); [] for a body.
 
     >>> rigid_body_violations(dict(I1=0.2, I3=0.5, Mgl=1.0))
-    ['expected I1 >= I3/2 (with M g l given as Mgl, ...), got I1 = 0.2 < I3/2 = 0.25']
+    ['expected I1 >= I3/2 (given M g l alone, ...), got I1 = 0.2 < I3/2 = 0.25']
     """
     return _violations(_values(params, parameter_keys(params), strict=False), rtol)
 
