@@ -117,7 +117,8 @@ def _heavy_drifts(p: dict, energy: Any, p_phi: Any, p_psi: Any, cos_theta: Any) 
     with np.errstate(invalid="ignore"):
         e_scale = float(np.nanmax(T + np.abs(V))) if np.any(np.isfinite(T)) else float("nan")
         t_max = float(np.nanmax(T)) if np.any(np.isfinite(T)) else 0.0
-    p_scale = max(abs(float(pf[0])), abs(float(ps[0])), np.sqrt(2.0 * I1 * t_max), np.sqrt(I1 * mgl))
+    # (√(I1 M g l) is finite: a momentum undefined at t = 0 does not make the scale undefined)
+    p_scale = float(np.nanmax([abs(pf[0]), abs(ps[0]), np.sqrt(2.0 * I1 * t_max), np.sqrt(I1 * mgl)]))
     momenta = "max(|p_φ(0)|, |p_ψ(0)|, √(2 I1 T_max), √(I1 M g l))"
     return {"energy": drift(E, e_scale, "max_t (T + |V|)"), "p_phi": drift(pf, p_scale, momenta),
             "p_psi": drift(ps, p_scale, momenta)}
@@ -384,7 +385,8 @@ def _free_drift(scene: Scene, cols: dict, solution: Any, t: np.ndarray) -> dict[
     E, L2 = _free_invariants()(*moments, *np.asarray(w).T)
     E, L = np.asarray(E, float), np.sqrt(np.asarray(L2, float))
     with np.errstate(invalid="ignore"):
-        return {"energy": drift(E, float(np.nanmax(E)), "max_t T"), "L_norm": drift(L, float(np.nanmax(L)), "max_t |L|")}
+        return {"energy": drift(E, float(np.nanmax(E)), "max_t T"),
+                "L_norm": drift(L, float(np.nanmax(L)), "max_t |L|")}
 
 
 # --- falling cat -------------------------------------------------------------------------------

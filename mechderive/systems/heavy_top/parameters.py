@@ -129,7 +129,8 @@ def _violations(v: dict[str, np.ndarray], rtol: float) -> list[str]:
     bad = I1_cm < v["I3"] / 2 - rtol * v["I1"]
     if np.any(bad):
         return ["expected I1 - M l² >= I3/2 (the triangle inequality I1_cm + I2_cm >= I3 about the centre of mass, "
-                f"I1_cm = I1 - M l²), got I1 - M l² = {_first(I1_cm, bad):.6g} < I3/2 = {_first(v['I3'] / 2, bad):.6g}"]
+                f"I1_cm = I1 - M l²), got I1 - M l² = {_first(I1_cm, bad):.6g} "
+                f"< I3/2 = {_first(v['I3'] / 2, bad):.6g}"]
     return []
 
 
@@ -144,7 +145,7 @@ def check_params(params: Mapping[str, Any], *, strict: bool = True, rtol: float 
     >>> check_params(dict(I1=1.0, I3=0.5, M=1.0, g=1.0, l=1.0))
     Traceback (most recent call last):
     ...
-    mechderive.errors.UnphysicalInertiaError: expected I1 - M l² >= I3/2 (the triangle inequality ...), got I1 - M l² = 0 < I3/2 = 0.25; ...
+    mechderive.errors.UnphysicalInertiaError: expected I1 - M l² >= I3/2 (...), got I1 - M l² = 0 < I3/2 = 0.25; ... strict=False ...
     >>> check_params(dict(I1=1.0, I3=0.5, M=1.0, g=1.0, l=1.0), strict=False)["l"]
     1.0
     >>> check_params(dict(I1=1.0, I3=0.5, Mgl=1.0))
