@@ -470,7 +470,7 @@ def test_every_builtin_parses_and_round_trips(name):
 def test_builtin_list_and_descriptions():
     names = [n for n, _ in builtin.list_scenes()]
     assert names == ["default", "heavy_top_looping", "heavy_top_hanging", "sleeping_top", "free_top_tumbling",
-                     "free_top_near_separatrix", "tennis_racket", "falling_cat"]
+                     "free_top_near_separatrix", "tennis_racket", "gyroscope", "falling_cat"]
     for _, description in builtin.list_scenes():
         assert description and "\n" not in description
 

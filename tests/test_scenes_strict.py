@@ -20,6 +20,7 @@ from mechderive.cli import main
 from mechderive.core.drift import drift
 from mechderive.errors import InvalidInputError, NonFiniteValueError, UnphysicalInertiaError
 from mechderive.scenes import planner
+from mechderive.scenes.builtin import load_builtin
 from mechderive.scenes.planner import run_scene
 from mechderive.scenes.schema import load_scene, parse_scene, scene_to_toml, waived
 from mechderive.systems.free_top.exact import FreeTopSolution, exact_free_top
@@ -295,3 +296,17 @@ def test_rtol_met_is_the_estimate_against_rtol(monkeypatch):
     monkeypatch.setitem(planner._SYSTEMS["free_top"], "exact", without_estimate)
     r = run_scene(scene)
     assert r.report["rtol_met"] is None and r.report["rtol_met_reason"] == "no error estimate: rtol not verified"
+
+
+def test_builtin_gyroscope_claims():
+    # against DOP853 (rtol 1e-12, an independent path through ω and R): θ_max = 98.34°, mean φ̇ = 2.588 rad/s
+    scene = load_builtin("gyroscope")
+    assert scene.parameters == dict(I1=0.010625, I3=0.00125, Mgl=0.981)
+    t = np.linspace(0.0, 0.1752225710658712, 201)  # one nutation period
+    run = integrate_heavy_top(scene.parameters, scene.initial, t, rtol=1e-12)
+    phi, theta, _ = run.euler_angles.T
+    assert math.degrees(theta.max()) - 90 == pytest.approx(8.34, abs=0.005)
+    assert phi[-1] / t[-1] == pytest.approx(2.588, abs=5e-4)
+    assert 0.981 / (0.00125 * 300.0) == pytest.approx(2.616)
+    r = run_scene(dataclasses.replace(scene, samples=201))
+    assert r.report["rtol_met"] is True and r.report["drift"]["p_phi"] < 1e-14
