@@ -645,10 +645,11 @@ def exact_heavy_top(parameters: Mapping[str, float], initial: Mapping[str, float
     """
     params = check_params(parameters, strict=strict)
     init = check_initial(initial)
-    mgl = params["M"] * params["g"] * params["l"]  # Mgl if given (check_params: M = l = 1, g = Mgl)
-    if not np.all(mgl > 0):
-        raise InvalidInputError("expected M g l > 0 for the heavy top's closed form (with M g l = 0 the top is "
-                                f"free: use the free_top system), got M g l = {float(np.min(mgl)):g}")
+    # (check_params realises Mgl as M = 1, g = Mgl, l = 1)
+    for k, v in (("Mgl", params["g"]),) if "Mgl" in parameters else (("g", params["g"]), ("l", params["l"])):
+        if not np.all(v > 0):
+            raise InvalidInputError(f"expected params['{k}'] > 0 for the heavy top's closed form (with M g l = 0 "
+                                    f"the top is free: use the free_top system), got {float(np.min(v)):g}")
     if any(np.ndim(v) for v in (*params.values(), *init.values())):
         raise InvalidInputError("expected scalar parameters and initial values for one closed-form motion, got arrays")
     with mpmath.workdps(_DPS):
