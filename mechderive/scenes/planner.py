@@ -48,7 +48,7 @@ from ..errors import InvalidInputError
 from ..systems.heavy_top import parameters as heavy_top_parameters
 from .schema import Scene, waived
 
-__all__ = ["RunResult", "run_scene", "choose_method"]
+__all__ = ["RunResult", "run_scene"]
 
 _R_NAMES = tuple(f"R{i}{j}" for i in (1, 2, 3) for j in (1, 2, 3))
 
