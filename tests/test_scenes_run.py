@@ -158,6 +158,8 @@ def test_falling_cat_scene_reports_its_integrators_error():
     assert est is not None and 0 < est <= scene.rtol and r.report["rtol_met"]
     # the flip ends at π: the estimate is at least as large as that end-point error
     assert abs(r.columns["flip_angle"][-1] - np.pi) <= 10 * est
+    # L = 0 against the angular momentum the turn carries (~0.1): as accurate as R, ~rtol
+    assert r.report["drift"]["L"] <= scene.rtol and r.report["drift_relative_to"]["L"].startswith("max_t |Ĩ Ω| = ")
 
 
 def test_near_pole_scene_says_so_for_phi_but_not_for_R():

@@ -176,7 +176,7 @@ def test_scene_is_frozen():
 
 @pytest.mark.parametrize("doc, error, message", [
     (heavy(colour="red"), InvalidInputError,
-     r"scene key colour: unknown key; expected top-level keys name, system, method, rtol and tables "
+     r"scene key colour: unknown key; expected top-level keys name, system, method, rtol, strict and tables "
      r"\[parameters\], \[initial\], \[time\], \[output\]"),
     (heavy(extras={"a": 1}), InvalidInputError,
      r"scene table \[extras\]: unknown table; expected one of \[parameters\], \[initial\], \[time\], \[output\]"),
@@ -470,7 +470,7 @@ def test_every_builtin_parses_and_round_trips(name):
 def test_builtin_list_and_descriptions():
     names = [n for n, _ in builtin.list_scenes()]
     assert names == ["default", "heavy_top_looping", "heavy_top_hanging", "sleeping_top", "free_top_tumbling",
-                     "free_top_near_separatrix", "tennis_racket", "falling_cat"]
+                     "free_top_near_separatrix", "tennis_racket", "gyroscope", "falling_cat"]
     for _, description in builtin.list_scenes():
         assert description and "\n" not in description
 

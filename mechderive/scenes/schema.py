@@ -11,8 +11,10 @@ The format (optional keys marked)::
     system = "heavy_top"      # "free_top" | "heavy_top" | "falling_cat"
     method = "auto"           # optional: "auto" | "exact" | "integrate" (default "auto")
     rtol = 1e-10              # optional: relative accuracy in [1e-15, 1e-2] (default 1e-9)
+    strict = false            # optional (default true): accept moments no rigid body has (see below)
 
-    [parameters]              # heavy_top: I1 I3 M g l; free_top: I1 I2 I3; falling_cat: registered names
+    [parameters]              # heavy_top: I1 I3 M g l, or I1 I3 Mgl; free_top: I1 I2 I3;
+                              # falling_cat: registered names
     I1 = 1.0
     ...
 
@@ -25,6 +27,13 @@ The format (optional keys marked)::
 
     [output]
     quantities = ["theta", "phi", "psi"]   # names from QUANTITIES[system], each once
+
+``strict = false`` waives the rigid-body conditions — the triangle inequalities of a free
+top's moments, a heavy top's I1 - M l² ≥ I3/2 (I1 ≥ I3/2 with ``Mgl``) — which published
+benchmarks break (moments (3, 3, 9); a heavy top with I1 < M l²); the run's report lists
+what was waived.  Positive, finite values are required all the same.  A heavy top's
+``Mgl`` replaces ``M``, ``g`` and ``l`` (only their product enters the motion): give it
+or all three, never both.
 
 Every refusal is an :class:`~mechderive.errors.InvalidInputError` (or a subclass:
 :class:`~mechderive.errors.NonFiniteValueError` for NaN/inf,
@@ -76,6 +85,7 @@ __all__ = [
     "SYSTEM_PARAMETERS",
     "FALLING_CAT_PARAMETERS",
     "load_scene",
+    "waived",
     "parse_scene",
     "scene_to_toml",
     "register_system_parameters",
@@ -91,7 +101,8 @@ MAX_SAMPLES = 10**7
 MAX_NAME_LENGTH = 100
 MAX_SCENE_BYTES = 1_000_000  # a scene is a page of text; refuse anything far larger unread
 
-TOP_LEVEL_KEYS = ("name", "system", "method", "rtol")
+TOP_LEVEL_KEYS = ("name", "system", "method", "rtol", "strict")
+DEFAULT_STRICT = True
 TABLES = ("parameters", "initial", "time", "output")
 TIME_KEYS = ("t_end", "samples")
 OUTPUT_KEYS = ("quantities",)
@@ -111,11 +122,12 @@ QUANTITIES: dict[str, tuple[str, ...]] = {
 #: The falling cat's parameters (mechderive.systems.deformable.cat.check_cat_parameters validates them).
 FALLING_CAT_PARAMETERS: tuple[str, ...] = ("half_mass", "joint_offset", "radius", "half_length", "peak_bend")
 
-#: The [parameters] names per system.  heavy_top and free_top need all of theirs;
-#: falling_cat's are optional and open to :func:`register_system_parameters`.
+#: The [parameters] names per system.  free_top needs all of its; heavy_top all of
+#: I1 I3 M g l or all of I1 I3 Mgl; falling_cat's are optional and open to
+#: :func:`register_system_parameters`.
 SYSTEM_PARAMETERS: dict[str, tuple[str, ...]] = {
     "free_top": ("I1", "I2", "I3"),
-    "heavy_top": heavy_top_parameters.PARAMETER_NAMES,
+    "heavy_top": (*heavy_top_parameters.PARAM_KEYS, "Mgl"),
     "falling_cat": FALLING_CAT_PARAMETERS,
 }
 _OPEN_PARAMETERS = ("falling_cat",)
@@ -125,6 +137,8 @@ _INITIAL_NAMES: dict[str, tuple[str, ...]] = {
     "heavy_top": heavy_top_parameters.INITIAL_NAMES,
     "falling_cat": (),
 }
+#: The physics checks' way out (their STRICT_HINT), as said to a scene's author.
+_SCENE_STRICT_HINT = "add strict = false to the scene to accept moments no rigid body has"
 _NAME_PATTERN = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")  # a bare TOML key and a Python identifier
 
 
@@ -183,10 +197,6 @@ def _number(where: str, value: Any, *, expected: str = "a finite number",
     return x
 
 
-def _positive(where: str, value: Any) -> float:
-    return _number(where, value, expected="a number > 0", valid=lambda x: x > 0)
-
-
 def _choice(where: str, value: Any, allowed: tuple[str, ...]) -> str:
     if not isinstance(value, str) or value not in allowed:
         _fail(where, "one of " + ", ".join(repr(a) for a in allowed), value)
@@ -222,24 +232,60 @@ def _rename_keys(exc: InvalidInputError, table: str, names: tuple[str, ...]) -> 
 
 # ----------------------------------------------------------------------------- per-system checks
 
-def _parameters(system: str, given: Mapping[str, Any]) -> dict[str, float]:
+def _heavy_top_names(given: Mapping[str, Any]) -> tuple[str, ...]:
+    """The heavy top's parameter names in the form the scene uses: I1 I3 M g l, or I1 I3 Mgl."""
+    _check_keys(given, "parameters", SYSTEM_PARAMETERS["heavy_top"], (), "parameter for system 'heavy_top'")
+    separate = [k for k in ("M", "g", "l") if k in given]
+    if "Mgl" in given and separate:
+        raise InvalidInputError("scene keys " + ", ".join(_at("parameters", k) for k in ("Mgl", *separate))
+                                + ": expected either Mgl or all of M, g, l (only M g l enters the motion), got both")
+    names = heavy_top_parameters.MGL_KEYS if "Mgl" in given else heavy_top_parameters.PARAM_KEYS
+    for key in names:
+        if key not in given:
+            raise InvalidInputError(f"scene key {_at('parameters', key)}: missing; expected all of "
+                                    + (f"{_one_of(names)}, or {_one_of(heavy_top_parameters.MGL_KEYS)} "
+                                       "(only M g l enters the motion)" if "Mgl" not in names else _one_of(names)))
+    return names
+
+
+def _parameters(system: str, given: Mapping[str, Any], strict: bool = True) -> dict[str, float]:
     given = _as_table("[parameters]", given)
     names = SYSTEM_PARAMETERS[system]
-    required = () if system in _OPEN_PARAMETERS else names
-    _check_keys(given, "parameters", names, required, f"parameter for system {system!r}")
+    if system == "heavy_top":
+        names = _heavy_top_names(given)
+    else:
+        required = () if system in _OPEN_PARAMETERS else names
+        _check_keys(given, "parameters", names, required, f"parameter for system {system!r}")
     if system in _OPEN_PARAMETERS:
         return {k: _number(_at("parameters", k), given[k]) for k in names if k in given}
-    p = {k: _positive(_at("parameters", k), given[k]) for k in names}
+    expected = "a number > 0" + ("" if strict else " (strict = false does not waive this)")
+    p = {k: _number(_at("parameters", k), given[k], expected=expected, valid=lambda x: x > 0) for k in names}
     try:
         if system == "heavy_top":
-            heavy_top_parameters.check_parameters(p)
+            heavy_top_parameters.check_params(p, strict=strict)
         else:
             from ..inertia.validate import check_principal_moments  # imports SymPy: only when needed
 
-            check_principal_moments(p["I1"], p["I2"], p["I3"])
+            check_principal_moments(p["I1"], p["I2"], p["I3"], strict=strict)
     except InvalidInputError as exc:
-        raise _rename_keys(exc, "parameters", names) from exc
+        renamed = _rename_keys(exc, "parameters", names)
+        raise type(renamed)(str(renamed).replace(heavy_top_parameters.STRICT_HINT, _SCENE_STRICT_HINT)) from exc
     return p
+
+
+def waived(scene: "Scene") -> list[str]:
+    """What ``strict = false`` let through for ``scene``: the rigid-body conditions its parameters violate.
+
+    Empty for a strict scene (nothing was waived) and for one whose body is physical anyway.
+    """
+    if scene.strict or scene.system == "falling_cat":
+        return []
+    p = scene.parameters
+    if scene.system == "heavy_top":
+        return heavy_top_parameters.rigid_body_violations(p)
+    from ..inertia.validate import rigid_body_violations
+
+    return rigid_body_violations(p["I1"], p["I2"], p["I3"])
 
 
 def _initial(system: str, given: Mapping[str, Any]) -> dict[str, Any]:
@@ -301,7 +347,9 @@ class Scene:
 
     Numbers become floats (``samples`` stays an int), ``quantities`` a tuple, a
     free top's ``initial`` holds ``omega`` as a 3-tuple and ``phi theta psi``
-    (default 0).  Invalid fields raise :class:`~mechderive.errors.InvalidInputError`.
+    (default 0); a heavy top's ``parameters`` keep the form given (``M g l`` or ``Mgl``).
+    ``strict=False`` accepts moments no rigid body has (:func:`waived` lists them).
+    Invalid fields raise :class:`~mechderive.errors.InvalidInputError`.
     """
 
     system: str
@@ -313,16 +361,19 @@ class Scene:
     samples: int
     quantities: tuple
     name: str | None = None
+    strict: bool = DEFAULT_STRICT
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
         set_(self, "name", _name(self.name))
+        if not isinstance(self.strict, bool):
+            _fail("strict", "true or false (a boolean; false accepts moments no rigid body has)", self.strict)
         system = _choice("system", self.system, SYSTEMS)
         set_(self, "method", _choice("method", self.method, METHODS))
         lo, hi = RTOL_RANGE
         set_(self, "rtol", _number("rtol", self.rtol, expected=f"a number in [{lo:g}, {hi:g}]",
                                    valid=lambda x: lo <= x <= hi))
-        set_(self, "parameters", _parameters(system, self.parameters))
+        set_(self, "parameters", _parameters(system, self.parameters, self.strict))
         set_(self, "initial", _initial(system, self.initial))
         set_(self, "t_end", _number("[time].t_end", self.t_end, expected="a finite number > 0",
                                     valid=lambda x: x > 0))
@@ -349,7 +400,7 @@ def parse_scene(mapping: Mapping[str, Any], *, name: str | None = None) -> Scene
     Traceback (most recent call last):
     ...
     mechderive.errors.InvalidInputError: scene key colour: unknown key; expected top-level keys name, system, \
-method, rtol and tables [parameters], [initial], [time], [output]
+method, rtol, strict and tables [parameters], [initial], [time], [output]
     """
     if not isinstance(mapping, Mapping):
         raise InvalidInputError(f"scene: expected a table of keys (a mapping), got {_show(mapping)}")
@@ -379,7 +430,8 @@ method, rtol and tables [parameters], [initial], [time], [output]
     return Scene(system=system, method=mapping.get("method", DEFAULT_METHOD), rtol=mapping.get("rtol", DEFAULT_RTOL),
                  parameters=mapping.get("parameters", {}), initial=mapping.get("initial", {}),
                  t_end=time["t_end"], samples=time["samples"], quantities=output["quantities"],
-                 name=name if name is not None else mapping.get("name"))
+                 name=name if name is not None else mapping.get("name"),
+                 strict=mapping.get("strict", DEFAULT_STRICT))
 
 
 def load_scene(path_or_text: os.PathLike | str, *, name: str | None = None) -> Scene:
@@ -393,7 +445,7 @@ def load_scene(path_or_text: os.PathLike | str, *, name: str | None = None) -> S
     Traceback (most recent call last):
     ...
     mechderive.errors.InvalidInputError: scene key samples: unknown key; expected top-level keys name, system, \
-method, rtol and tables [parameters], [initial], [time], [output]
+method, rtol, strict and tables [parameters], [initial], [time], [output]
     """
     default_name = None
     if isinstance(path_or_text, os.PathLike):
@@ -473,7 +525,7 @@ def scene_to_toml(scene: Scene) -> str:
     """
     lines = [f"name = {_toml_string(scene.name)}"] if scene.name is not None else []
     lines += [f"system = {_toml_string(scene.system)}", f"method = {_toml_string(scene.method)}",
-              f"rtol = {_toml_value(scene.rtol)}"]
+              f"rtol = {_toml_value(scene.rtol)}"] + (["strict = false"] if not scene.strict else [])
     for table, content in (("parameters", scene.parameters), ("initial", scene.initial),
                            ("time", {"t_end": scene.t_end, "samples": scene.samples}),
                            ("output", {"quantities": scene.quantities})):

@@ -341,7 +341,7 @@ class FreeTopSolution:
         return (w_space @ self._S.T)[..., :2]
 
 
-def exact_free_top(moments: Any, omega0: Any, *, R0: Any = None) -> FreeTopSolution:
+def exact_free_top(moments: Any, omega0: Any, *, R0: Any = None, strict: bool = True) -> FreeTopSolution:
     """The exact motion of a free rigid body with principal moments ``moments``.
 
     Parameters
@@ -349,6 +349,8 @@ def exact_free_top(moments: Any, omega0: Any, *, R0: Any = None) -> FreeTopSolut
     moments : (I1, I2, I3), principal moments about the centre of mass (kg m²), any order.
     omega0 : body components of ω at t = 0 (rad/s).
     R0 : the chapter's R at t = 0 (default identity: body axes along the space axes).
+    strict : ``False`` accepts moments that violate the triangle inequalities (no rigid body has
+        them, e.g. (3, 3, 9)); positive, finite moments are required all the same.
 
     >>> sol = exact_free_top((1.0, 2.0, 3.0), (1.0, 0.5, 1.0))
     >>> sol.kind, round(sol.polhode_period, 6)
@@ -356,7 +358,7 @@ def exact_free_top(moments: Any, omega0: Any, *, R0: Any = None) -> FreeTopSolut
     >>> bool(abs(sol.omega(0.0) - [1.0, 0.5, 1.0]).max() < 1e-15)
     True
     """
-    I = check_principal_moments(*as_finite_array(moments, "moments", shape=(3,)))
+    I = check_principal_moments(*as_finite_array(moments, "moments", shape=(3,)), strict=strict)
     w0 = as_finite_array(omega0, "omega0", shape=(3,))
     R0 = np.eye(3) if R0 is None else check_rotation_matrix(R0, "R0")
     with mpmath.workdps(_DPS):

@@ -210,11 +210,11 @@ def _drifts(omega: np.ndarray, inertia: np.ndarray) -> tuple[np.ndarray, np.ndar
 
 # --- input checks ----------------------------------------------------------------------------
 
-def _check_inertia(I: Any, shape: tuple[int | None, ...]) -> np.ndarray:
+def _check_inertia(I: Any, shape: tuple[int | None, ...], strict: bool = True) -> np.ndarray:
     from ...inertia.validate import check_principal_moments
 
     arr = as_finite_array(I, "I", shape=shape)
-    check_principal_moments(arr[..., 0], arr[..., 1], arr[..., 2])
+    check_principal_moments(arr[..., 0], arr[..., 1], arr[..., 2], strict=strict)
     return arr
 
 
@@ -263,12 +263,14 @@ def integrate_free_top(I: Sequence[float], omega0: Sequence[float], t_eval: Sequ
                        R0: Any = None, method: str = "DOP853", rtol: float | None = None,
                        atol: float | None = None, step: float | None = None, order: int | None = None,
                        torque: Torque | None = None, estimate_error: bool = True,
-                       backend: str = "auto") -> FreeTopTrajectory:
+                       backend: str = "auto", strict: bool = True) -> FreeTopTrajectory:
     """Integrate Euler's equations (3.33) and the orientation from ω(t_eval[0]) = omega0, R(t_eval[0]) = R0.
 
     Parameters
     ----------
     I : principal moments (I1, I2, I3), positive, obeying the triangle inequalities (kg m²).
+    strict : ``False`` accepts moments that violate the triangle inequalities (no rigid body has
+        them, e.g. (3, 3, 9)); positive, finite moments are required all the same.
     omega0 : initial body components of ω (rad/s).
     t_eval : strictly increasing output times (s), at least 2; the motion starts at ``t_eval[0]``.
     R0 : initial rotation matrix (e_a = R_ab ẽ_b); default the identity.
@@ -291,7 +293,7 @@ def integrate_free_top(I: Sequence[float], omega0: Sequence[float], t_eval: Sequ
     """
     method = _check_method(method)
     backend = check_backend(backend)
-    inertia = _check_inertia(I, (3,))
+    inertia = _check_inertia(I, (3,), strict)
     w0 = as_finite_array(omega0, "omega0", shape=(3,))
     t = _check_times(t_eval)
     q0 = _initial_quaternion(R0)
@@ -323,11 +325,12 @@ def integrate_free_top(I: Sequence[float], omega0: Sequence[float], t_eval: Sequ
 
 
 def integrate_free_top_ensemble(I: Any, omega0: Any, t_eval: Sequence[float], *, step: float, order: int = 4,
-                                R0: Any = None) -> FreeTopEnsemble:
+                                R0: Any = None, strict: bool = True) -> FreeTopEnsemble:
     """Integrate M free bodies at once with the Lie–Poisson splitting (for stability maps).
 
     ``omega0`` has shape (M, 3); ``I`` shape (3,) (common) or (M, 3) (one body each);
     ``R0`` None, (3, 3) or (M, 3, 3).  Output arrays are (N, M, ·): mind N·M·56 bytes.
+    ``strict=False`` accepts moments no rigid body has (as :func:`integrate_free_top`).
 
     >>> import numpy as np
     >>> w0 = np.array([[1.0, 0.5, 1.0], [0.0, 1.0, 0.01]])
@@ -337,7 +340,7 @@ def integrate_free_top_ensemble(I: Any, omega0: Any, t_eval: Sequence[float], *,
     """
     w0 = as_finite_array(omega0, "omega0", shape=(None, 3))
     M = w0.shape[0]
-    inertia = _check_inertia(I, (M, 3) if np.ndim(I) == 2 else (3,))
+    inertia = _check_inertia(I, (M, 3) if np.ndim(I) == 2 else (3,), strict)
     t = _check_times(t_eval)
     step = check_positive(step, "step")
     order = _check_order(order)

@@ -626,26 +626,30 @@ def classify(u1: float, u2: float, a: float, b: float, *, rtol: float = 1e-12) -
     return "monotonic precession" if g1 * g2 > 0 else "looping"
 
 
-def exact_heavy_top(parameters: Mapping[str, float], initial: Mapping[str, float]) -> HeavyTopSolution:
+def exact_heavy_top(parameters: Mapping[str, float], initial: Mapping[str, float], *,
+                    strict: bool = True) -> HeavyTopSolution:
     """The closed-form motion of a heavy symmetric top.
 
     Parameters
     ----------
     parameters : ``I1 I3 M g l`` — I1 = I2 and I3 principal moments about the pivot (kg m²),
-        mass (kg), gravity (m/s²), pivot-to-centre-of-mass distance (m).
+        mass (kg), gravity (m/s²), pivot-to-centre-of-mass distance (m); or ``I1 I3 Mgl`` (M g l > 0).
     initial : ``theta phi psi theta_dot phi_dot psi_dot`` (rad, rad/s) at t = 0.
+    strict : ``False`` accepts a top no rigid body is (I1 - M l² < I3/2); see
+        :func:`~mechderive.systems.heavy_top.parameters.check_params`.
 
     >>> top = exact_heavy_top(dict(I1=1.0, I3=0.5, M=0.1, g=10.0, l=1.0),
     ...                       dict(theta=0.5, phi=0.0, psi=0.0, theta_dot=0.0, phi_dot=0.0, psi_dot=5.0))
     >>> round(top.nutation_period, 4), top.motion_class
     (3.5177, 'cusps')
     """
-    params = check_params(parameters)
+    params = check_params(parameters, strict=strict)
     init = check_initial(initial)
-    for k in ("g", "l"):
-        if not params[k] > 0:
+    # (check_params realises Mgl as M = 1, g = Mgl, l = 1)
+    for k, v in (("Mgl", params["g"]),) if "Mgl" in parameters else (("g", params["g"]), ("l", params["l"])):
+        if not np.all(v > 0):
             raise InvalidInputError(f"expected params['{k}'] > 0 for the heavy top's closed form (with M g l = 0 "
-                                    f"the top is free: use the free_top system), got {params[k]:g}")
+                                    f"the top is free: use the free_top system), got {float(np.min(v)):g}")
     if any(np.ndim(v) for v in (*params.values(), *init.values())):
         raise InvalidInputError("expected scalar parameters and initial values for one closed-form motion, got arrays")
     with mpmath.workdps(_DPS):

@@ -342,13 +342,15 @@ def _rotation_angle_between(q: np.ndarray, q_ref: np.ndarray) -> np.ndarray:
 def integrate_heavy_top(params: Mapping[str, float], initial: Mapping[str, float], t_eval: Sequence[float], *,
                         method: str = "DOP853", rtol: float | None = None, atol: float | None = None,
                         step: float | None = None, order: int | None = None,
-                        estimate_error: bool = True, backend: str = "auto") -> HeavyTopTrajectory:
+                        estimate_error: bool = True, backend: str = "auto", strict: bool = True) -> HeavyTopTrajectory:
     """Integrate the heavy symmetric top from Euler angles and rates at ``t_eval[0]``.
 
     Parameters
     ----------
     params : dict(I1, I3, M, g, l): moments about the pivot (kg m²), mass (kg), gravity (m/s²),
-        pivot–centre-of-mass distance (m); checked by :func:`check_params`.
+        pivot–centre-of-mass distance (m); or dict(I1, I3, Mgl) (only M g l enters the motion);
+        checked by :func:`check_params`.
+    strict : ``False`` accepts a top no rigid body is (I1 - M l² < I3/2, see :func:`check_params`).
     initial : dict(theta, phi, psi, theta_dot, phi_dot, psi_dot) (rad, rad/s); θ ∈ [0, π]
         required, the others default to 0; checked by :func:`check_initial`.
     t_eval : strictly increasing output times (s), at least 2.
@@ -374,7 +376,7 @@ def integrate_heavy_top(params: Mapping[str, float], initial: Mapping[str, float
     elif backend not in SPLITTING_BACKENDS:
         raise InvalidInputError(f"expected backend one of {', '.join(map(repr, SPLITTING_BACKENDS))} with "
                                 f"method='splitting', got {backend!r}")
-    p = check_params(params)
+    p = check_params(params, strict=strict)
     if any(np.ndim(v) for v in p.values()):
         raise ShapeError("expected scalar `params` values (use integrate_heavy_top_ensemble for arrays), got arrays")
     init = check_initial(initial)
@@ -402,11 +404,12 @@ def integrate_heavy_top(params: Mapping[str, float], initial: Mapping[str, float
 
 
 def integrate_heavy_top_ensemble(params: Mapping[str, Any], initial: Mapping[str, Any], t_eval: Sequence[float], *,
-                                 step: float, order: int = 4) -> HeavyTopEnsemble:
+                                 step: float, order: int = 4, strict: bool = True) -> HeavyTopEnsemble:
     """Integrate M heavy tops at once with the splitting (vectorised over members).
 
     Every value of ``params`` and ``initial`` may be a scalar or an array of shape (M,); M is
-    their common broadcast length.  Outputs are (N, M, ·): mind N·M·56 bytes.
+    their common broadcast length.  Outputs are (N, M, ·): mind N·M·56 bytes.  ``params`` may give
+    ``Mgl`` in place of M, g, l; ``strict=False`` accepts tops no rigid body is (see :func:`check_params`).
 
     >>> import numpy as np
     >>> ens = integrate_heavy_top_ensemble(dict(I1=1.0, I3=0.5, M=1.0, g=4.0, l=0.25),
@@ -415,7 +418,7 @@ def integrate_heavy_top_ensemble(params: Mapping[str, Any], initial: Mapping[str
     >>> ens.omega.shape, bool(ens.p_psi_drift.max() < 1e-14)
     ((2, 3, 3), True)
     """
-    p = check_params(params)
+    p = check_params(params, strict=strict)
     init = check_initial(initial)
     try:
         shape = np.broadcast_shapes(*(np.shape(v) for v in (*p.values(), *init.values())))
