@@ -281,7 +281,8 @@ def test_cli_exit_status(argv, status, capsys):
 def test_cli_json(capsys):
     assert main(["check", "heavy_top", "dt(theta_dot) = 0", "--json"]) == 1
     out = json.loads(capsys.readouterr().out)
-    assert out["verdict"] == "false" and set(out) == {"verdict", "method", "detail", "counterexample"}
+    assert out["verdict"] == "false" and set(out) == {"verdict", "method", "detail", "counterexample", "assumptions"}
+    assert out["assumptions"][0].startswith("a real top: I1, I3, M, g, l > 0 and I1 ≥ M l² + I3/2")
     assert main(["check", "heavy_top", "foo = 0", "--json"]) == 2
     err = json.loads(capsys.readouterr().out)
     assert err["verdict"] == "error" and "unknown symbol 'foo'" in err["detail"]
