@@ -215,6 +215,19 @@ def _sides(lhs: sp.Expr, rhs: sp.Expr, system: System, specs: list, *, on_motion
 # --- deciding LHS − RHS ≡ 0 -------------------------------------------------------------------------
 
 
+def _trig_expandable(expr: sp.Expr) -> bool:
+    """Whether is_zero's trig expansion is affordable: no sin(n x) with an integer |n| > 100.
+
+    (sin(10**40*theta) would be expanded into a polynomial of degree 10^40.)
+    """
+    for f in expr.atoms(sp.sin, sp.cos, sp.tan):
+        for term in sp.Add.make_args(f.args[0]):
+            c, rest = term.as_coeff_Mul()
+            if c.is_Integer and abs(c) > 100 and not rest.is_number:
+                return False
+    return True
+
+
 def _trig_args_are_symbols(expr: sp.Expr) -> bool:
     """Whether is_zero's False is a proof: the sines and cosines are of distinct plain symbols only."""
     e = sp.expand_trig(expr.replace(sp.tan, lambda x: sp.sin(x) / sp.cos(x)))
@@ -309,7 +322,8 @@ def _decide(lhs: sp.Expr, rhs: sp.Expr, system: System, *, points: int, seed: in
         return _Outcome("zero", "exact", "proven: both sides are the same expression")
     if diff.has(sp.zoo, sp.nan, sp.oo, -sp.oo):
         return _Outcome("unknown", "none", f"singular: LHS − RHS = {str(diff)[:80]} (division by zero)")
-    done, exact = within(lambda: is_zero(diff), budget, unbudgeted_ok=sp.count_ops(diff) < 400)
+    done, exact = (within(lambda: is_zero(diff), budget, unbudgeted_ok=sp.count_ops(diff) < 400)
+                   if _trig_expandable(diff) else (False, None))
     exact = exact if done else None
     if exact:
         return _Outcome("zero", "exact", "proven: LHS − RHS reduces to 0 modulo sin² + cos² = 1 (trig normal form)")
@@ -383,7 +397,8 @@ def _positivity_used(claim: str, given: Sequence[str], system: System, *, on_mot
     if not present or diff == 0:
         return []
     if method == "exact":
-        done, proven = within(lambda: is_zero(diff), budget, unbudgeted_ok=sp.count_ops(diff) < 400)
+        done, proven = within(lambda: is_zero(diff), budget, unbudgeted_ok=sp.count_ops(diff) < 400
+                              ) if _trig_expandable(diff) else (False, None)
     else:
         done, simplified = within(lambda: sp.simplify(diff), budget, unbudgeted_ok=False)
         proven = done and simplified == 0
