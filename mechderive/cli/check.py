@@ -50,8 +50,8 @@ def add_parser(sub: "argparse._SubParsersAction") -> None:
     p.add_argument("--points", type=int, default=20, help="random points of the numeric method (≥ 20; default 20)")
     p.add_argument("--seed", type=int, default=20261121, help="seed of the random points")
     p.add_argument("--budget", type=float, default=5.0,
-                   help="seconds allowed for each symbolic simplification and for the high-precision "
-                   "evaluations (default 5)")
+                   help="seconds allowed for each symbolic simplification and for each numeric step's "
+                   "evaluations beyond 60 digits (default 5)")
     p.add_argument("--any-moments", action="store_true",
                    help="draw the parameters independently (any positive values), not only real bodies")
     p.set_defaults(run=run)

@@ -411,8 +411,8 @@ def check(claim: str, system: str = "heavy_top", *, given: Sequence[str] = (), p
 
     ``given``: "name = expression" entries (new names or specialisations); ``points``: random
     points of the numeric method (≥ 20); ``seed``: their seed; ``budget``: seconds allowed for
-    each symbolic step (is_zero, sympy.simplify) and for the numeric evaluations beyond the
-    base precision; ``any_moments``: draw the parameters independently (any positive values)
+    each symbolic step (is_zero, sympy.simplify) and, in each numeric step, for all the
+    evaluations beyond the base precision (60 digits, more for long typed numbers); ``any_moments``: draw the parameters independently (any positive values)
     instead of only those of a real body (:mod:`.sampling`).  What the answer assumes is in
     :attr:`Verdict.assumptions`.  Input errors raise :class:`~mechderive.errors.InvalidInputError`.
     """

@@ -363,12 +363,11 @@ def _draw_free_top(rng: random.Random) -> dict[str, Fraction]:
 
 
 def _free_top_refusal(values: Mapping[str, float]) -> str | None:
-    from ..errors import UnphysicalInertiaError
     from ..inertia.validate import check_principal_moments
 
     try:
         check_principal_moments(values["I1"], values["I2"], values["I3"])
-    except UnphysicalInertiaError as exc:
+    except InvalidInputError as exc:
         return str(exc)
     return None
 
