@@ -254,7 +254,7 @@ def _counterexample(result, draw) -> dict:
         out = {"point": {s.name: decimal_text(v) for s, v in draw.point.items()},
                "lhs": mpmath.nstr(result.lhs, shown), "rhs": mpmath.nstr(result.rhs, shown),
                "difference": mpmath.nstr(d, 10), "relative difference": mpmath.nstr(rel, 5)}
-    if draw.body is not None:
+    if draw.body is not None and not set(draw.body) <= set(out["point"]):  # the rest of the real body
         out["body"] = draw.body
     return out
 
