@@ -194,8 +194,7 @@ HOSTILE = [
 @pytest.mark.parametrize("text, message", HOSTILE, ids=[h[1] for h in HOSTILE])
 def test_hostile_input_refused_fast(text, message):
     get_system(HEAVY)  # the symbol table (cheap), built before timing
-    gc.collect()  # time the parser, not a full collection of the suite's garbage (0.1-0.2 s) that may fall here
-    gc.disable()
+    gc.disable()  # time the parser, not a full collection of the suite's garbage (0.1-0.2 s) that may fall here
     try:
         start = time.perf_counter()
         with pytest.raises(InvalidInputError, match=message):
@@ -394,6 +393,9 @@ def test_proofs_state_the_positivity_they_use():
     assert v.assumptions == ("M, l > 0: the proof uses the parameters' positivity",)
     assert check("p_psi = I3*(psi_dot + cos(theta)*phi_dot)").assumptions == ()
     assert check("dt(E) = 0").assumptions == ()
+    # the sign can be used in a --given value too: sqrt(I1²) = I1 only for I1 ≥ 0
+    assert check("I1 = I2", FREE, given=["I2 = sqrt(I1**2)"]).assumptions == (
+        "I1 > 0: the proof uses the parameters' positivity",)
 
 
 # --- issue 11: no identity from digits that are not there (reproduction 7) -----------------------------

@@ -377,19 +377,26 @@ def _context(exprs: Sequence[sp.Expr], system: System, new: list[str], specs: li
     return "".join("; " + p for p in parts)
 
 
-def _positivity_used(claim: str, given: Sequence[str], system: System, *, on_motion: bool, method: str,
-                     budget: float) -> list[str]:
+def _positivity_used(claim: str, given: Sequence[str], system: System, parsed: tuple, *, on_motion: bool,
+                     method: str, budget: float) -> list[str]:
     """The positive parameters a proof relied on being positive: [] if it holds for any real values.
 
-    The claim is rebuilt with the parameters replaced by merely real stand-ins (so that neither
-    the parser's automatic simplifications, e.g. sqrt(M**2) = M, nor the proof can use their
-    sign) and the same method is tried again; if it fails (or runs out of time) the parameters
-    present are named.
+    The claim is parsed again with the parameters replaced by merely real stand-ins.  If that
+    parse is the original one renamed (no automatic simplification such as sqrt(M**2) = M used
+    the sign) and the proof is the trig normal form — polynomial algebra, blind to signs — the
+    proof did not use positivity.  Otherwise it is tried again on the stand-ins; if it fails (or
+    runs out of time) the parameters present are named.  (The system's definitions are taken
+    as derived, for positive parameters.)
     """
     rename = {s: sp.Symbol(s.name, real=True) for s in system.names.values()
               if system.kind(s) == "parameter" and s.is_positive}
     names, specs, _ = _parse_givens(given, system, rename)
     lhs, rhs = parse_claim(claim, names, hints=system.hints)
+    lhs0, rhs0, specs0 = parsed
+    same = (lhs0.xreplace(rename) == lhs and rhs0.xreplace(rename) == rhs
+            and [(rename.get(s, s), v.xreplace(rename)) for s, v in specs0] == specs)
+    if same and method == "exact":
+        return []
     left, right = _sides(lhs, rhs, system, specs, on_motion=on_motion, rename=rename)
     stand_ins = set(rename.values())
     present = sorted({s.name for s in left.free_symbols | right.free_symbols if s in stand_ins})
@@ -433,8 +440,8 @@ def check(claim: str, system: str = "heavy_top", *, given: Sequence[str] = (), p
     def verdict(name: str, outcome: _Outcome, detail: str, *, on_motion: bool) -> Verdict:
         assumptions = list(outcome.assumptions)
         if outcome.kind == "zero" and outcome.method in ("exact", "simplify"):
-            positive = _positivity_used(claim, given, sys_, on_motion=on_motion, method=outcome.method,
-                                        budget=budget)
+            positive = _positivity_used(claim, given, sys_, (lhs, rhs, specs), on_motion=on_motion,
+                                        method=outcome.method, budget=budget)
             if positive:
                 assumptions.append(f"{', '.join(positive)} > 0: the proof uses the parameters' positivity")
         example = _with_given(outcome.counterexample, specs)
