@@ -313,7 +313,8 @@ def _fractions(values: dict) -> dict:
 @pytest.mark.parametrize("system, claim, impossible", [
     # a real body has I1 + I2 − I3 = 2 Σ m z² ≥ 0, so sqrt(x²) = |x| = x; only I1 + I2 < I3 breaks it
     (FREE, "sqrt((I1 + I2 - I3)**2) = I1 + I2 - I3", lambda p: p["I1"] + p["I2"] < p["I3"]),
-    # a real top has I1 − M l² ≥ I3/2 (triangle inequality about the centre of mass): the same with x = I1 − M l² − I3/2
+    # a real top has I1 − M l² ≥ I3/2 (the triangle inequality about the centre of mass):
+    # the same with x = I1 − M l² − I3/2
     (HEAVY, "sqrt((I1 - M*l**2 - I3/2)**2) = I1 - M*l**2 - I3/2",
      lambda p: p["I1"] - p["M"] * p["l"] ** 2 < p["I3"] / 2),
 ])
@@ -451,7 +452,7 @@ def test_tiny_but_genuine_differences_are_false(claim, difference):
 
 @pytest.mark.parametrize("claim, method", [
     ("(theta + 1e20) - 1e20 = theta", "exact"),           # SymPy folds the constants: no cancellation left
-    ("sqrt((theta + 1e20)**2) - 1e20 = theta", "numeric"),  # |θ + 1e20| − 1e20 = θ for θ > −1e20: 20 digits cancel
+    ("sqrt((theta + 1e20)**2) - 1e20 = theta", "numeric"),  # |θ + 1e20| − 1e20 = θ (θ > −1e20): 20 digits cancel
     ("log(sqrt((theta + 1e30)**2) - 1e30) = log(theta)", "numeric"),  # the log of a 30-digit cancellation
 ])
 def test_cancellations_that_hold_are_identities(claim, method):

@@ -81,8 +81,8 @@ from ..errors import InvalidInputError
 from .budget import within
 from .evaluate import CannotEvaluate
 from .parse import FUNCTIONS, MAX_LENGTH, dt, parse_claim, parse_expression
-from .sampling import PointSampler, decimal_text
-from .significance import compare
+from .sampling import Draw, PointSampler, decimal_text
+from .significance import Comparison, compare
 from .systems import System, get_system
 
 __all__ = ["Verdict", "check", "EXIT_STATUS"]
@@ -245,7 +245,7 @@ def _high_precision(digits_typed: int) -> int:
     return max(60, 2 * digits_typed + 40)
 
 
-def _counterexample(result, draw) -> dict:
+def _counterexample(result: Comparison, draw: Draw) -> dict:
     """Both sides' values at the point, to enough digits that they differ visibly."""
     with mpmath.workdps(result.digits):
         d = result.difference
@@ -261,9 +261,10 @@ def _counterexample(result, draw) -> dict:
 
 def _sample(lhs: sp.Expr, rhs: sp.Expr, system: System, points: int, seed: int, hi: int, *, specs: list,
             any_moments: bool, budget: float) -> dict:
-    """Compare both sides at seeded random points (:func:`.significance.compare`): agreements, rejections, a counterexample.
+    """Compare both sides at seeded random points (:func:`.significance.compare`).
 
-    Evaluations beyond ``hi`` digits share a time budget of ``budget`` seconds.
+    Returns the agreements, the rejections by reason, or a counterexample.  Evaluations beyond
+    ``hi`` digits share a time budget of ``budget`` seconds.
     """
     syms = sorted(lhs.free_symbols | rhs.free_symbols, key=sp.default_sort_key)
     sampler = PointSampler(system, syms, specs, any_moments=any_moments)
@@ -419,8 +420,9 @@ def check(claim: str, system: str = "heavy_top", *, given: Sequence[str] = (), p
     ``given``: "name = expression" entries (new names or specialisations); ``points``: random
     points of the numeric method (≥ 20); ``seed``: their seed; ``budget``: seconds allowed for
     each symbolic step (is_zero, sympy.simplify) and, in each numeric step, for all the
-    evaluations beyond the base precision (60 digits, more for long typed numbers); ``any_moments``: draw the parameters independently (any positive values)
-    instead of only those of a real body (:mod:`.sampling`).  What the answer assumes is in
+    evaluations beyond the base precision (60 digits, more for long typed numbers);
+    ``any_moments``: draw the parameters independently (any positive values) instead of only
+    those of a real body (:mod:`.sampling`).  What the answer assumes is in
     :attr:`Verdict.assumptions`.  Input errors raise :class:`~mechderive.errors.InvalidInputError`.
     """
     if not isinstance(points, int) or isinstance(points, bool) or not 20 <= points <= 1000:
