@@ -385,6 +385,9 @@ def test_given_values_are_kept_inside_the_region():
 def test_later_givens_see_earlier_specialisations():
     # I2 = I1 then I3 = I2 means I3 = I1: a sphere, whose Euler equations give dω3/dt = 0
     assert check("dt(omega3) = 0", FREE, given=["I2 = I1", "I3 = I2"]).verdict == "on-shell"
+    # I2 = I3 then I3 = I1: the claim sees I2 = I1 too, and so does the body shown (a sphere)
+    body = check("I2 = 2*I3", FREE, given=["I2 = I3", "I3 = I1"]).counterexample["body"]
+    assert body["I1"] == body["I2"] == body["I3"]
 
 
 def test_proofs_state_the_positivity_they_use():

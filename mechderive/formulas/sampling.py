@@ -55,7 +55,12 @@ class PointSampler:
             self._free = tuple(n for n in system.region.parameters if system.names[n] in set(symbols))
         self._system = system
         self._params = {system.names[n]: n for n in region.parameters} if region else {}
-        self._specs = [(s, v) for s, v in specs if s in self._params]
+        self._specs = []  # each value as the claim sees it: with the later specialisations applied too
+        for k, (sym, value) in enumerate(specs):
+            if sym in self._params:
+                for later, by in specs[k + 1:]:
+                    value = value.xreplace({later: by})
+                self._specs.append((sym, value))
         self.active = bool(self._specs) or any(s in self._params for s in symbols)
         self._region = region if self.active else None
         needed = set(symbols)
