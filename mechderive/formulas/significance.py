@@ -143,7 +143,7 @@ def compare(lhs: sp.Expr, rhs: sp.Expr, point: Mapping[sp.Symbol, sp.Rational], 
             return _difference(lhs, rhs, point, digits)
         left = deadline - time.monotonic()
         if left <= 0:
-            raise _Rejected(f"needs {digits} digits; the time budget is spent")
+            raise _Rejected("needs more digits than the time budget allows (--budget)")
         done, out = within(lambda: _difference(lhs, rhs, point, digits), left, unbudgeted_ok=True)
         if not done:
             raise _Rejected(f"the {digits}-digit evaluation exceeded the time budget")
