@@ -18,6 +18,10 @@ derivative; pi; Euler's number is exp(1).  A claim starting with '-' goes after 
 
 verdicts: identity (holds at every state, derivatives independent), on-shell (holds along every
 motion), false (with a counterexample), undecided.  Exit status 0, 0, 1, 3; 2 for an input error.
+Counterexamples are looked for among real bodies (free top: positive moments obeying the triangle
+inequalities; heavy top: I1 >= M l^2 + I3/2), as the solvers require; --any-moments lifts that.
+A numeric agreement counts only when the digits resolve every scale in the claim; an overflow or
+a difference below the working precision is undecided, never an identity.
 
 examples:
   mechderive check heavy_top --symbols
@@ -42,11 +46,14 @@ def add_parser(sub: "argparse._SubParsersAction") -> None:
                    help="define a new name, or specialise a state variable or parameter (repeatable)")
     p.add_argument("--symbols", action="store_true", help="list the system's symbols with their meanings")
     p.add_argument("--json", action="store_true",
-                   help="print {verdict, method, detail, counterexample?} as JSON")
+                   help="print {verdict, method, detail, counterexample?, assumptions?} as JSON")
     p.add_argument("--points", type=int, default=20, help="random points of the numeric method (≥ 20; default 20)")
     p.add_argument("--seed", type=int, default=20261121, help="seed of the random points")
     p.add_argument("--budget", type=float, default=5.0,
-                   help="seconds allowed for each symbolic simplification (default 5)")
+                   help="seconds allowed for each symbolic simplification and for each numeric step's "
+                   "evaluations beyond 60 digits (default 5)")
+    p.add_argument("--any-moments", action="store_true",
+                   help="draw the parameters independently (any positive values), not only real bodies")
     p.set_defaults(run=run)
 
 
@@ -72,8 +79,12 @@ def _print_verdict(v) -> None:
         print("  counterexample: " + (point or "(both sides are constants)"))
         if "given" in c:
             print("    given: " + ", ".join(f"{k} = {x}" for k, x in c["given"].items()))
+        if "body" in c:
+            print("    the body: " + ", ".join(f"{k} = {x}" for k, x in c["body"].items()))
         print(f"    LHS = {c['lhs']}")
         print(f"    RHS = {c['rhs']}")
+    for a in v.assumptions:
+        print(f"  assumes {a}")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -88,7 +99,7 @@ def run(args: argparse.Namespace) -> int:
         if args.claim is None:
             raise InvalidInputError("expected a claim like 'dt(E) = 0' (or --symbols), got none")
         verdict = check(args.claim, args.system, given=args.given, points=args.points, seed=args.seed,
-                        budget=args.budget)
+                        budget=args.budget, any_moments=args.any_moments)
     except InvalidInputError as exc:
         if args.json:
             json.dump({"verdict": "error", "method": "none", "detail": str(exc)}, sys.stdout, ensure_ascii=False)

@@ -1,7 +1,8 @@
 """Formulas in: parse a user's formula safely and decide it against a system's derived model.
 
 ``check(claim, system, given=...)`` returns a :class:`Verdict` — identity, on-shell, false (with a
-counterexample) or undecided — see :mod:`mechderive.formulas.check`; the parser
+counterexample) or undecided, and what it assumes (real bodies; the parameters' signs where a
+proof used them) — see :mod:`mechderive.formulas.check`; the parser
 (:mod:`.parse`) builds SymPy expressions from a whitelist without ``eval``/``sympify``; each
 system's names and derived definitions are in :mod:`.systems`.
 

@@ -18,22 +18,31 @@ parameters (:mod:`.systems`), and is replaced by it first.  Then:
     ``dt(E) = 0`` and ``I1*dt(omega1) = (I2 - I3)*omega2*omega3`` are on-shell.
 ``false``
     LHS − RHS ≠ 0 at a random point (on a motion, for a claim with derivatives), shown with
-    both sides' values, confirmed at the higher precision below.
+    both sides' values: the difference exceeds its error bound at two precisions.
 ``undecided``
-    no valid sample point (singular, non-real, outside the domain) or an expression the
-    evaluator does not know; the detail says why.
+    no valid sample point (singular, non-real, overflowing, or needing more digits or time than
+    allowed) or an expression the evaluator does not know; the detail says why.
 
 Method, strongest first: ``exact`` — :func:`mechderive.core.simplify.is_zero`, a proof for
 rational functions of sines and cosines; ``simplify`` — ``sympy.simplify`` gave 0 within the
-time budget (a proof up to SymPy's correctness); ``numeric`` — LHS − RHS vanished to 20 digits
-at 30-digit precision *and* to hi − 10 digits at hi-digit precision (hi = 60, or twice the digits
-typed plus 40 when the input has long numbers, so that a typed approximation of π is not taken
-for π) at each of ``points`` seeded random points, relative to the size of the terms (from a
-running error bound): established, not proven; the detail states the chance of a false
-positive and its assumption.  Random values are short decimals drawn from each symbol's range
-(:meth:`System.sampling_range`:
-θ ∈ (0.15, π − 0.15), parameters in (0.5, 2.5), other variables in (−2, 2)), so ``numeric`` and
-counterexamples are about that domain (e.g. ``sqrt(1 - u**2) = sin(theta)`` holds there).
+time budget (a proof up to SymPy's correctness); ``numeric`` — at each of ``points`` seeded
+random points LHS − RHS vanished within its running error bound, that bound being below
+10^−K of the size of the terms, with K at least 50 (more for long typed numbers, so that a
+typed approximation of π is not taken for π) and at least twice the decades by which the
+expression hides some input, plus 30 (:mod:`.significance`: ``sin(θ) = sin(θ + 1e-100)`` is
+evaluated with enough digits to see 1e-100, and is false): established, not proven; the
+detail states the chance of a false positive and its assumption.  A proof that needs the
+parameters to be positive (as they are declared: ``sqrt(M**2) = M``) says so in
+:attr:`Verdict.assumptions`.
+
+Points.  The parameters are those of a *real body* (:mod:`.sampling`): free top I1, I2, I3 > 0
+obeying the triangle inequalities, heavy top I1 ≥ M l² + I3/2 with I1, I3, M, g, l > 0 — the
+bodies the solvers accept — so a formula false only for impossible bodies is an identity
+here, with that condition in :attr:`Verdict.assumptions`; ``any_moments=True`` draws each
+parameter on its own.  The other values are short decimals drawn from each symbol's range
+(:meth:`System.sampling_range`: θ ∈ (0.15, π − 0.15), other variables in (−2, 2)), so
+``numeric`` and counterexamples are about that domain (e.g. ``sqrt(1 - u**2) = sin(theta)``
+holds there).
 
 ``given`` entries ``name = expression`` either *define a new name* (to translate another book's
 convention, e.g. ``I1_cm = I1 - M*l**2``; later entries may use earlier names) or *specialise*
@@ -48,32 +57,38 @@ Specialising a defined quantity, a derivative, or redefining a name is refused.
 'on-shell'
 >>> check("dt(theta_dot) = 0").verdict
 'false'
+>>> v = check("sqrt((I1 + I2 - I3)**2) = I1 + I2 - I3", "free_top")   # false only for impossible bodies
+>>> v.verdict, v.assumptions[0][:40]
+('identity', 'a real body: I1, I2, I3 > 0 and I1 + I2 ')
+>>> check("exp(exp(1000)) = 1").verdict                                     # an overflow proves nothing
+'undecided'
 """
 
 from __future__ import annotations
 
 import keyword
+import math
 import random
-import signal
-import threading
-from contextlib import contextmanager
+import time
 from dataclasses import dataclass
-from typing import Any, Callable, Iterator, Sequence
+from typing import Any, Sequence
 
 import mpmath
 import sympy as sp
 
 from ..core.simplify import is_zero
 from ..errors import InvalidInputError
-from .evaluate import CannotEvaluate, PointRejected, evaluate
+from .budget import within
+from .evaluate import CannotEvaluate
 from .parse import FUNCTIONS, MAX_LENGTH, dt, parse_claim, parse_expression
+from .sampling import Draw, PointSampler, decimal_text
+from .significance import Comparison, compare
 from .systems import System, get_system
 
 __all__ = ["Verdict", "check", "EXIT_STATUS"]
 
 #: Exit status of ``mechderive check`` for each verdict (2 is an input error).
 EXIT_STATUS = {"identity": 0, "on-shell": 0, "false": 1, "undecided": 3}
-_TOL_30 = mpmath.mpf("1e-20")
 _DEGREE = 20  # the assumed degree in the false-positive bound
 _MAX_GIVEN = 20
 
@@ -86,6 +101,7 @@ class Verdict:
     method: str
     detail: str
     counterexample: dict | None = None
+    assumptions: tuple[str, ...] = ()  # what the answer holds under (real bodies; positivity a proof used)
 
     @property
     def exit_status(self) -> int:
@@ -95,6 +111,8 @@ class Verdict:
         out: dict[str, Any] = {"verdict": self.verdict, "method": self.method, "detail": self.detail}
         if self.counterexample is not None:
             out["counterexample"] = self.counterexample
+        if self.assumptions:
+            out["assumptions"] = list(self.assumptions)
         return out
 
 
@@ -104,58 +122,25 @@ class _Outcome:
     method: str
     detail: str
     counterexample: dict | None = None
-
-
-# --- time budget for symbolic steps ---------------------------------------------------------------
-
-
-class _OutOfTime(BaseException):
-    """Raised by the alarm; a BaseException so that SymPy's ``except Exception`` does not swallow it."""
-
-
-@contextmanager
-def _budget(seconds: float) -> Iterator[bool]:
-    """Yield True and interrupt the block after ``seconds`` (main thread with SIGALRM); else yield False."""
-    usable = hasattr(signal, "setitimer") and threading.current_thread() is threading.main_thread()
-    if usable and signal.getitimer(signal.ITIMER_REAL)[0] > 0:
-        usable = False  # someone else's timer is armed (e.g. pytest-timeout): leave it alone
-    if not usable or seconds <= 0:
-        yield False
-        return
-
-    def _alarm(signum, frame):
-        raise _OutOfTime()
-
-    previous = signal.signal(signal.SIGALRM, _alarm)
-    signal.setitimer(signal.ITIMER_REAL, seconds)
-    try:
-        yield True
-    finally:
-        signal.setitimer(signal.ITIMER_REAL, 0)
-        signal.signal(signal.SIGALRM, previous)
-
-
-def _within(fn: Callable[[], Any], seconds: float, *, unbudgeted_ok: bool) -> tuple[bool, Any]:
-    """(finished, result) of ``fn()`` under a time budget; without a usable alarm only if ``unbudgeted_ok``."""
-    try:
-        with _budget(seconds) as armed:
-            if not armed and not unbudgeted_ok:
-                return False, None
-            return True, fn()
-    except _OutOfTime:
-        return False, None
+    assumptions: tuple[str, ...] = ()
 
 
 # --- parsing the claim and the givens -------------------------------------------------------------
 
 
-def _parse_givens(given: Sequence[str], system: System) -> tuple[dict, list, list]:
-    """(names for parsing, [(symbol, value)] specialisations, [new names]) from ``name = expression`` texts."""
+def _parse_givens(given: Sequence[str], system: System, rename: dict | None = None) -> tuple[dict, list, list]:
+    """(names for parsing, [(symbol, value)] specialisations, [new names]) from ``name = expression`` texts.
+
+    A specialisation's value has the earlier specialisations substituted (``I2 = I1`` then
+    ``I3 = I2`` makes I3 = I1).  ``rename`` maps symbols to stand-ins used throughout (the
+    assumption-free parameters of :func:`_positivity_used`).
+    """
+    rename = rename or {}
     if isinstance(given, str):
         raise InvalidInputError(f"expected a list of 'name = expression' strings, got the string {given!r}")
     if len(given) > _MAX_GIVEN:
         raise InvalidInputError(f"expected at most {_MAX_GIVEN} --given entries, got {len(given)}")
-    names: dict[str, sp.Expr] = dict(system.names)
+    names: dict[str, sp.Expr] = {n: rename.get(s, s) for n, s in system.names.items()}
     specs: list[tuple[sp.Symbol, sp.Expr]] = []
     new: list[str] = []
     for text in given:
@@ -183,7 +168,8 @@ def _parse_givens(given: Sequence[str], system: System) -> tuple[dict, list, lis
                 f"{left!r} (fixed by {'its definition' if kind == 'defined' else 'the equations of motion'})")
         if value.has(dt):
             raise InvalidInputError(f"expected a value without dt() for {left}, got {right.strip()[:60]!r}")
-        value = system.expand_definitions(value)
+        value = _specialise(system.expand_definitions(value).xreplace(rename), specs)
+        sym = rename.get(sym, sym)
         if value.has(sym):
             raise InvalidInputError(f"expected the value of {left} not to depend on {left}, got {value}")
         if sym.is_positive and value.is_positive is False:
@@ -216,7 +202,30 @@ def _specialise(expr: sp.Expr, specs: list) -> sp.Expr:
     return expr
 
 
+def _sides(lhs: sp.Expr, rhs: sp.Expr, system: System, specs: list, *, on_motion: bool,
+           rename: dict | None = None) -> list[sp.Expr]:
+    """Both sides expanded (:func:`_expand`), renamed, then specialised."""
+    out = []
+    for x in (lhs, rhs):
+        e = _expand(x, system, on_motion=on_motion)
+        out.append(_specialise(e.xreplace(rename) if rename else e, specs))
+    return out
+
+
 # --- deciding LHS − RHS ≡ 0 -------------------------------------------------------------------------
+
+
+def _trig_expandable(expr: sp.Expr) -> bool:
+    """Whether is_zero's trig expansion is affordable: no sin(n x) with an integer |n| > 100.
+
+    (sin(10**40*theta) would be expanded into a polynomial of degree 10^40.)
+    """
+    for f in expr.atoms(sp.sin, sp.cos, sp.tan):
+        for term in sp.Add.make_args(f.args[0]):
+            c, rest = term.as_coeff_Mul()
+            if c.is_Integer and abs(c) > 100 and not rest.is_number:
+                return False
+    return True
 
 
 def _trig_args_are_symbols(expr: sp.Expr) -> bool:
@@ -225,113 +234,132 @@ def _trig_args_are_symbols(expr: sp.Expr) -> bool:
     return all(f.args[0].is_Symbol for f in e.atoms(sp.sin, sp.cos))
 
 
-def _decimal(r: sp.Rational) -> str:
-    return str(sp.Float(r, 6)).rstrip("0").rstrip(".") if r.q != 1 else str(r)
-
-
 def _high_precision(digits_typed: int) -> int:
-    """Digits of the confirming evaluation: 60, more when the input has long numbers.
+    """The fewest digits an agreement is accepted at: 60, more when the input has long numbers.
 
     A decimal of D digits (or a fraction of D digits in all) can approximate an irrational constant
     to about D digits (2D for a fraction); the confirming precision exceeds that, so a typed
-    approximation of π is never taken for π.
+    approximation of π is never taken for π.  (:mod:`.significance` raises it further where the
+    expression's own scales ask for it.)
     """
     return max(60, 2 * digits_typed + 40)
 
 
-def _sample(lhs: sp.Expr, rhs: sp.Expr, system: System, points: int, seed: int, hi: int) -> dict:
-    """Evaluate both sides at seeded random points (30 then ``hi`` digits): agreements, rejections, a counterexample."""
-    syms = sorted((lhs - rhs).free_symbols | lhs.free_symbols | rhs.free_symbols, key=sp.default_sort_key)
+def _counterexample(result: Comparison, draw: Draw) -> dict:
+    """Both sides' values at the point, to enough digits that they differ visibly."""
+    with mpmath.workdps(result.digits):
+        d = result.difference
+        rel = abs(d) / max(abs(result.lhs), abs(result.rhs))
+        shown = min(result.digits, max(30, math.ceil(-float(mpmath.log10(rel))) + 6))
+        out = {"point": {s.name: decimal_text(v) for s, v in draw.point.items()},
+               "lhs": mpmath.nstr(result.lhs, shown), "rhs": mpmath.nstr(result.rhs, shown),
+               "difference": mpmath.nstr(d, 10), "relative difference": mpmath.nstr(rel, 5)}
+    if draw.body is not None and not set(draw.body) <= set(out["point"]):  # the rest of the real body
+        out["body"] = draw.body
+    return out
+
+
+def _sample(lhs: sp.Expr, rhs: sp.Expr, system: System, points: int, seed: int, hi: int, *, specs: list,
+            any_moments: bool, budget: float) -> dict:
+    """Compare both sides at seeded random points (:func:`.significance.compare`).
+
+    Returns the agreements, the rejections by reason, or a counterexample.  Evaluations beyond
+    ``hi`` digits share a time budget of ``budget`` seconds.
+    """
+    syms = sorted(lhs.free_symbols | rhs.free_symbols, key=sp.default_sort_key)
+    sampler = PointSampler(system, syms, specs, any_moments=any_moments)
     rng = random.Random(seed)
     needed = points if syms else 1
-    agreed, rejected, attempts = 0, {}, 0
+    deadline = time.monotonic() + budget
+    agreed, rejected, attempts, digits, agreed_to = 0, {}, 0, [], []
     while agreed < needed and attempts < 10 * needed:
         attempts += 1
-        point = {}
-        for s in syms:
-            low, high = system.sampling_range(s)
-            point[s] = sp.Rational(f"{rng.uniform(low, high):.4f}")
-        try:
-            results = {}
-            for dps in (30, hi):
-                (vl, el), (vr, er) = evaluate(lhs, point, dps=dps), evaluate(rhs, point, dps=dps)
-                with mpmath.workdps(dps):
-                    scale = (el + er) / (2 * mpmath.mp.eps) + abs(vl) + abs(vr)
-                    results[dps] = (vl, vr, vl - vr, scale)
-        except PointRejected as exc:
-            reason = str(exc)
-            rejected[reason] = rejected.get(reason, 0) + 1
+        draw = sampler.draw(rng)
+        if draw.refusal is not None:
+            rejected[draw.refusal] = rejected.get(draw.refusal, 0) + 1
             continue
+        try:
+            result = compare(lhs, rhs, draw.point, base=hi, deadline=deadline)
         except CannotEvaluate as exc:
-            return {"error": str(exc)}
-        (l30, r30, d30, s30), (lhi, rhi, dhi, shi) = results[30], results[hi]
-        with mpmath.workdps(hi):  # every comparison at the high precision
-            ok30 = abs(d30) <= _TOL_30 * s30
-            okhi = abs(dhi) <= mpmath.mpf(10) ** (10 - hi) * shi
-            if ok30 and okhi:
-                agreed += 1
-                continue
-            if not okhi and abs(dhi - d30) <= _TOL_30 * s30:  # a difference both precisions see
-                rel = abs(dhi) / max(abs(lhi), abs(rhi), shi * mpmath.mpf(10) ** -hi)
-                return {"counterexample": {
-                    "point": {s.name: _decimal(v) for s, v in point.items()},
-                    "lhs": mpmath.nstr(lhi, 30), "rhs": mpmath.nstr(rhi, 30),
-                    "difference": mpmath.nstr(dhi, 10), "relative difference": mpmath.nstr(rel, 5)}}
-        reason = f"the 30- and {hi}-digit values disagree (ill-conditioned)"
-        rejected[reason] = rejected.get(reason, 0) + 1
-    widths = [system.sampling_range(s)[1] - system.sampling_range(s)[0] for s in syms]
+            return {"error": str(exc), "condition": sampler.condition}
+        if result.kind == "differ":
+            return {"counterexample": _counterexample(result, draw), "digits": result.digits,
+                    "condition": sampler.condition}
+        if result.kind == "reject":
+            rejected[result.reason] = rejected.get(result.reason, 0) + 1
+            continue
+        agreed += 1
+        digits.append(result.digits)
+        agreed_to.append(result.agreed_to)
+    widths = sampler.widths()
     return {"agreed": agreed, "needed": needed, "rejected": rejected, "attempts": attempts,
-            "width": min(widths) if widths else 1.0, "symbols": syms}
+            "width": min(widths) if widths else 1.0, "symbols": syms, "condition": sampler.condition,
+            "digits": (min(digits), max(digits)) if digits else None, "agreed_to": min(agreed_to, default=0)}
 
 
-def _false_positive_bound(points: int, width: float, hi: int) -> float:
+def _false_positive_bound(points: int, width: float, agreed_to: int) -> float:
     """(4 (δ/2)^(1/d) / w)^n: Pólya's bound on the measure of {|p| ≤ δ} for a monic degree-d polynomial.
 
-    δ = 10^(10 − hi) is the tolerance of the ``hi``-digit evaluation; the assumption (stated in the
-    verdict) is that a nonzero difference is, in some sampled variable of range width w, a
-    polynomial of degree ≤ d = 20 whose leading coefficient is at least the size of the terms.
+    δ = 10^−K, K the digits (of the size of the terms) to which LHS − RHS vanished at each point;
+    the assumption (stated in the verdict) is that a nonzero difference is, in some sampled
+    variable of range width w, a polynomial of degree ≤ d = 20 whose leading coefficient is at
+    least the size of the terms.
     """
-    per_point = min(1.0, 4 * (10.0 ** (10 - hi) / 2) ** (1 / _DEGREE) / width)
+    per_point = min(1.0, 4 * (10.0 ** -agreed_to / 2) ** (1 / _DEGREE) / width)
     return per_point ** points
 
 
+def _digits_text(span: tuple[int, int] | None) -> str:
+    if span is None:
+        return ""
+    low, high = span
+    return f"{low} digits" if low == high else f"{low}-{high} digits"
+
+
 def _decide(lhs: sp.Expr, rhs: sp.Expr, system: System, *, points: int, seed: int, budget: float,
-            hi: int) -> _Outcome:
+            hi: int, specs: list, any_moments: bool) -> _Outcome:
     diff = lhs - rhs
     if diff == 0:
         return _Outcome("zero", "exact", "proven: both sides are the same expression")
     if diff.has(sp.zoo, sp.nan, sp.oo, -sp.oo):
         return _Outcome("unknown", "none", f"singular: LHS − RHS = {str(diff)[:80]} (division by zero)")
-    done, exact = _within(lambda: is_zero(diff), budget, unbudgeted_ok=sp.count_ops(diff) < 400)
+    done, exact = (within(lambda: is_zero(diff), budget, unbudgeted_ok=sp.count_ops(diff) < 400)
+                   if _trig_expandable(diff) else (False, None))
     exact = exact if done else None
     if exact:
         return _Outcome("zero", "exact", "proven: LHS − RHS reduces to 0 modulo sin² + cos² = 1 (trig normal form)")
     proven_nonzero = exact is False and _trig_args_are_symbols(diff)
-    sample = _sample(lhs, rhs, system, points, seed, hi)
+    sample = _sample(lhs, rhs, system, points, seed, hi, specs=specs, any_moments=any_moments, budget=budget)
+    region = (sample["condition"],) if sample.get("condition") else ()
+    where = "" if not region or any_moments else " among real bodies"
     if "error" in sample:
-        return _Outcome("unknown", "none", sample["error"])
+        return _Outcome("unknown", "none", sample["error"], assumptions=region)
     if "counterexample" in sample:
-        return _Outcome("nonzero", "numeric", f"LHS ≠ RHS at a random point (confirmed at {hi} digits)",
-                        sample["counterexample"])
-    if proven_nonzero:
-        return _Outcome("nonzero", "exact", "LHS − RHS has a nonzero trig normal form, though it agreed to "
-                        f"{hi - 10} digits at every sampled point")
+        return _Outcome("nonzero", "numeric", f"LHS ≠ RHS at a random point{where} (the difference exceeds its "
+                        f"error bound at two precisions, up to {sample['digits']} digits)",
+                        sample["counterexample"], assumptions=region)
+    if proven_nonzero and (sample["agreed"] or not where):  # (no real body at all is not a counterexample)
+        seen = (f", though it vanished to {sample['agreed_to']} digits at the {sample['agreed']} points sampled{where}"
+                if sample["agreed"] else "")
+        return _Outcome("nonzero", "exact", f"LHS − RHS has a nonzero trig normal form{seen}")
     if sample["agreed"] < sample["needed"]:
         reasons = "; ".join(f"{n}× {r}" for r, n in sorted(sample["rejected"].items(), key=lambda x: -x[1])[:3])
-        return _Outcome("unknown", "none", f"only {sample['agreed']} of {sample['attempts']} random points gave "
-                        f"trustworthy real values ({reasons})")
-    done, simplified = _within(lambda: sp.simplify(diff), budget, unbudgeted_ok=False)
+        return _Outcome("unknown", "none", f"only {sample['agreed']} of {sample['attempts']} random points{where} "
+                        f"gave trustworthy real values ({reasons})", assumptions=region)
+    done, simplified = within(lambda: sp.simplify(diff), budget, unbudgeted_ok=False)
     if done and simplified == 0:
         return _Outcome("zero", "simplify",
                         f"proven: sympy.simplify(LHS − RHS) = 0 (and it agreed numerically at {points} points)")
-    n = sample["agreed"]
+    n, k = sample["agreed"], sample["agreed_to"]
+    at = _digits_text(sample["digits"])
     if not sample["symbols"]:
-        return _Outcome("zero", "numeric", f"not proven: both sides are constants equal to {hi - 10} digits")
-    bound = _false_positive_bound(n, sample["width"], hi)
+        return _Outcome("zero", "numeric", f"not proven: both sides are constants equal to {k} digits ({at})")
+    bound = _false_positive_bound(n, sample["width"], k)
     return _Outcome("zero", "numeric", (
-        f"not proven: LHS − RHS vanished to 20 digits at 30-digit precision and to {hi - 10} digits at "
-        f"{hi}-digit precision at each of {n} random points; probability of a false positive < {bound:.0e}, assuming a "
-        f"nonzero difference would be a polynomial of degree ≤ {_DEGREE} in a sampled variable (Pólya's bound)"))
+        f"not proven: LHS − RHS vanished within its error bound, below 10^-{k} of the size of the terms, at each "
+        f"of {n} random points{where} ({at}, chosen from the scales in the expression); probability of a false "
+        f"positive < {bound:.0e}, assuming a nonzero difference would be a polynomial of degree ≤ {_DEGREE} in a "
+        "sampled variable (Pólya's bound)"), assumptions=region)
 
 
 # --- the public entry point --------------------------------------------------------------------------
@@ -350,45 +378,93 @@ def _context(exprs: Sequence[sp.Expr], system: System, new: list[str], specs: li
     return "".join("; " + p for p in parts)
 
 
+def _positivity_used(claim: str, given: Sequence[str], system: System, parsed: tuple, *, on_motion: bool,
+                     method: str, budget: float) -> list[str]:
+    """The positive parameters a proof relied on being positive: [] if it holds for any real values.
+
+    The claim is parsed again with the parameters replaced by merely real stand-ins.  If that
+    parse is the original one renamed (no automatic simplification such as sqrt(M**2) = M used
+    the sign) and the proof is the trig normal form — polynomial algebra, blind to signs — the
+    proof did not use positivity.  Otherwise it is tried again on the stand-ins; if it fails (or
+    runs out of time) the parameters present are named.  (The system's definitions are taken
+    as derived, for positive parameters.)
+    """
+    rename = {s: sp.Symbol(s.name, real=True) for s in system.names.values()
+              if system.kind(s) == "parameter" and s.is_positive}
+    names, specs, _ = _parse_givens(given, system, rename)
+    lhs, rhs = parse_claim(claim, names, hints=system.hints)
+    lhs0, rhs0, specs0 = parsed
+    same = (lhs0.xreplace(rename) == lhs and rhs0.xreplace(rename) == rhs
+            and [(rename.get(s, s), v.xreplace(rename)) for s, v in specs0] == specs)
+    if same and method == "exact":
+        return []
+    left, right = _sides(lhs, rhs, system, specs, on_motion=on_motion, rename=rename)
+    stand_ins = set(rename.values())
+    present = sorted({s.name for s in left.free_symbols | right.free_symbols if s in stand_ins})
+    diff = left - right
+    if not present or diff == 0:
+        return []
+    if method == "exact":
+        done, proven = within(lambda: is_zero(diff), budget, unbudgeted_ok=sp.count_ops(diff) < 400
+                              ) if _trig_expandable(diff) else (False, None)
+    else:
+        done, simplified = within(lambda: sp.simplify(diff), budget, unbudgeted_ok=False)
+        proven = done and simplified == 0
+    return [] if done and proven else present
+
+
 def check(claim: str, system: str = "heavy_top", *, given: Sequence[str] = (), points: int = 20,
-          seed: int = 20261121, budget: float = 5.0) -> Verdict:
+          seed: int = 20261121, budget: float = 5.0, any_moments: bool = False) -> Verdict:
     """Decide ``claim`` ("LHS = RHS") for ``system`` ("heavy_top" or "free_top"); see the module docstring.
 
     ``given``: "name = expression" entries (new names or specialisations); ``points``: random
     points of the numeric method (≥ 20); ``seed``: their seed; ``budget``: seconds allowed for
-    each symbolic step (is_zero, sympy.simplify).  Input errors raise
-    :class:`~mechderive.errors.InvalidInputError`.
+    each symbolic step (is_zero, sympy.simplify) and, in each numeric step, for all the
+    evaluations beyond the base precision (60 digits, more for long typed numbers);
+    ``any_moments``: draw the parameters independently (any positive values) instead of only
+    those of a real body (:mod:`.sampling`).  What the answer assumes is in
+    :attr:`Verdict.assumptions`.  Input errors raise :class:`~mechderive.errors.InvalidInputError`.
     """
     if not isinstance(points, int) or isinstance(points, bool) or not 20 <= points <= 1000:
         raise InvalidInputError(f"expected points between 20 and 1000, got {points!r}")
     if not isinstance(budget, (int, float)) or not 0 <= budget <= 600:
         raise InvalidInputError(f"expected a time budget between 0 and 600 seconds, got {budget!r}")
+    if not isinstance(any_moments, bool):
+        raise InvalidInputError(f"expected any_moments to be True or False, got {any_moments!r}")
     sys_ = get_system(system)
     names, specs, new = _parse_givens(given, sys_)
     lhs, rhs = parse_claim(claim, names, hints=sys_.hints)
     typed = sum(ch.isdigit() for text in (claim, *given) for ch in text)
-    opts = {"points": points, "seed": seed, "budget": budget, "hi": _high_precision(typed)}
+    opts = {"points": points, "seed": seed, "budget": budget, "hi": _high_precision(typed), "specs": specs,
+            "any_moments": any_moments}
     used = _context([lhs, rhs], sys_, new, specs)
 
-    formal = [_specialise(_expand(x, sys_, on_motion=False), specs) for x in (lhs, rhs)]
+    def verdict(name: str, outcome: _Outcome, detail: str, *, on_motion: bool) -> Verdict:
+        assumptions = list(outcome.assumptions)
+        if outcome.kind == "zero" and outcome.method in ("exact", "simplify"):
+            positive = _positivity_used(claim, given, sys_, (lhs, rhs, specs), on_motion=on_motion,
+                                        method=outcome.method, budget=budget)
+            if positive:
+                assumptions.append(f"{', '.join(positive)} > 0: the proof uses the parameters' positivity")
+        example = _with_given(outcome.counterexample, specs)
+        return Verdict(name, outcome.method, detail, example, tuple(assumptions))
+
+    formal = _sides(lhs, rhs, sys_, specs, on_motion=False)
     off = _decide(*formal, sys_, **opts)
     if off.kind == "zero":
-        return Verdict("identity", off.method, off.detail + used)
+        return verdict("identity", off, off.detail + used, on_motion=False)
     has_derivatives = any(sys_.kind(s) == "derivative" for e in formal for s in e.free_symbols)
     if not has_derivatives:
-        if off.kind == "nonzero":
-            return Verdict("false", off.method, off.detail + used, _with_given(off.counterexample, specs))
-        return Verdict("undecided", off.method, off.detail + used)
-    on = [_specialise(_expand(x, sys_, on_motion=True), specs) for x in (lhs, rhs)]
+        return verdict("false" if off.kind == "nonzero" else "undecided", off, off.detail + used, on_motion=False)
+    on = _sides(lhs, rhs, sys_, specs, on_motion=True)
     motion = {"heavy_top": "θ̈, φ̈, ψ̈ from the Euler–Lagrange equations of L = T − V",
               "free_top": "ω̇ from Euler's equations (3.33) without torque"}[sys_.name]
     result = _decide(*on, sys_, **opts)
     where = f"; on a motion: {motion}{used}"
     if result.kind == "zero":
-        return Verdict("on-shell", result.method, result.detail + where + "; not an identity off the motion")
-    if result.kind == "nonzero":
-        return Verdict("false", result.method, result.detail + where, _with_given(result.counterexample, specs))
-    return Verdict("undecided", result.method, result.detail + where)
+        return verdict("on-shell", result, result.detail + where + "; not an identity off the motion", on_motion=True)
+    return verdict("false" if result.kind == "nonzero" else "undecided", result, result.detail + where,
+                   on_motion=True)
 
 
 def _with_given(counterexample: dict | None, specs: list) -> dict | None:

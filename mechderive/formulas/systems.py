@@ -13,6 +13,11 @@ A system names four kinds of symbols:
   ω3 from (3.58), or E := the energy (3.65).  A claim is decided after every defined name is
   replaced by its definition.
 
+Real bodies.  A system's :class:`BodyRegion` states which parameter values a real body has (the
+solvers' own validators decide) and draws values inside that region by a parametrisation of
+every real body (free top: I1 = B + C, I2 = C + A, I3 = A + B from the second moments A, B,
+C > 0; heavy top: I1 = M l² + I3/2 + a slack > 0); ``check`` samples there by default.
+
 Time derivatives.  A system's state has a jet: q → q_dot → q_ddot → q_d3 … (formal symbols).
 :meth:`System.formal_dt` is the chain rule over that jet (every derivative an independent
 variable: what an *identity* must survive); :meth:`System.motion_dt` is the derivative along
@@ -33,15 +38,17 @@ from __future__ import annotations
 
 import functools
 import math
+import random
 from dataclasses import dataclass, field
-from typing import Callable
+from fractions import Fraction
+from typing import Callable, Mapping
 
 import sympy as sp
 
 from ..core.symbols import state_symbol
 from ..errors import InvalidInputError
 
-__all__ = ["Quantity", "System", "get_system", "SYSTEMS"]
+__all__ = ["Quantity", "BodyRegion", "System", "get_system", "SYSTEMS"]
 
 _SUFFIX = {0: "", 1: "_dot", 2: "_ddot"}
 
@@ -61,6 +68,33 @@ class Quantity:
     define: Callable[["System"], sp.Expr] | None = None
 
 
+@dataclass(frozen=True)
+class BodyRegion:
+    """The parameters of a real body, as the solvers accept them: where ``check`` draws them by default.
+
+    ``draw(rng)`` gives exact values (4-decimal fractions) strictly inside the region *by
+    construction*, from a parametrisation of every real body, never by rejecting draws;
+    ``refusal(values)`` is the solvers' own validator, returning its message or None;
+    ``condition`` states the region; ``widths`` are the widths of the independently drawn
+    variables of the parametrisation (for the false-positive bound).
+    """
+
+    parameters: tuple[str, ...]
+    condition: str
+    draw: Callable[[random.Random], dict[str, Fraction]]
+    refusal: Callable[[Mapping[str, float]], str | None]
+    widths: tuple[float, ...]
+
+
+def _decimal4(rng: random.Random, low: float, high: float) -> Fraction:
+    """A uniform draw in (low, high) as an exact 4-decimal fraction (so that it prints exactly)."""
+    return Fraction(f"{rng.uniform(low, high):.4f}")
+
+
+def _ceil4(x: Fraction) -> Fraction:
+    return Fraction(math.ceil(x * 10_000), 10_000)
+
+
 @dataclass
 class System:
     """A system's symbols, the jet of its state and the flow of its equations of motion.
@@ -78,6 +112,7 @@ class System:
     quantities: list[Quantity]
     domain: dict[str, tuple[float, float]]
     hints: dict[str, str] = field(default_factory=dict)
+    region: BodyRegion | None = None
 
     def __post_init__(self) -> None:
         self.names = {q.name: q.symbol for q in self.quantities}
@@ -209,6 +244,36 @@ class System:
 # --- the heavy symmetric top (3.62)-(3.83) -------------------------------------------------------
 
 
+def _draw_heavy_top(rng: random.Random) -> dict[str, Fraction]:
+    """I3, M, g, l > 0 and a slack s > 0, then I1 = M l² + I3/2 + s (rounded up): always a real top."""
+    I3, M, g = (_decimal4(rng, 0.5, 2.5) for _ in range(3))
+    l = _decimal4(rng, 0.2, 1.2)
+    slack = _decimal4(rng, 0.05, 1.5)
+    return {"I1": _ceil4(M * l * l + I3 / 2 + slack), "I3": I3, "M": M, "g": g, "l": l}
+
+
+def _heavy_top_refusal(values: Mapping[str, float]) -> str | None:
+    from ..systems.heavy_top.parameters import check_params
+
+    try:
+        check_params(dict(values))
+    except InvalidInputError as exc:
+        return str(exc)
+    if not all(values[k] > 0 for k in ("M", "g", "l")):
+        return "expected M, g, l > 0 (a heavy top), got " + ", ".join(f"{k} = {values[k]:g}" for k in "Mgl")
+    return None
+
+
+_HEAVY_TOP_REGION = BodyRegion(
+    parameters=("I1", "I3", "M", "g", "l"),
+    condition="a real top: I1, I3, M, g, l > 0 and I1 ≥ M l² + I3/2, the triangle inequality about the "
+              "centre of mass that the solvers require",
+    draw=_draw_heavy_top,
+    refusal=_heavy_top_refusal,
+    widths=(1.0, 1.45),  # l and the slack: the narrowest independent draws
+)
+
+
 def _heavy_top() -> System:
     from ..kinematics import euler as _euler
     from ..systems.heavy_top import model as ht
@@ -273,6 +338,7 @@ def _heavy_top() -> System:
         highest=lambda: m().acceleration_map,
         quantities=qs,
         domain={"theta": (0.15, math.pi - 0.15), "phi": (-3.0, 3.0), "psi": (-3.0, 3.0)},
+        region=_HEAVY_TOP_REGION,
         hints={
             "I2": "the heavy top is symmetric: I2 = I1",
             "L": "the Lagrangian is called Lagrangian",
@@ -284,6 +350,36 @@ def _heavy_top() -> System:
 
 
 # --- the free rigid body (3.33)-(3.49) -----------------------------------------------------------
+
+
+def _draw_free_top(rng: random.Random) -> dict[str, Fraction]:
+    """Second moments A = Σ m x², B = Σ m y², C = Σ m z² > 0, then I1 = B + C, I2 = C + A, I3 = A + B.
+
+    Every such triple is a real body (I1 + I2 − I3 = 2C > 0 and cyclically) and every real body but
+    a plate (C = 0) or a line has one, so the draw covers the region without rejecting any point.
+    """
+    A, B, C = (_decimal4(rng, 0.05, 1.25) for _ in range(3))
+    return {"I1": B + C, "I2": C + A, "I3": A + B}
+
+
+def _free_top_refusal(values: Mapping[str, float]) -> str | None:
+    from ..inertia.validate import check_principal_moments
+
+    try:
+        check_principal_moments(values["I1"], values["I2"], values["I3"])
+    except InvalidInputError as exc:
+        return str(exc)
+    return None
+
+
+_FREE_TOP_REGION = BodyRegion(
+    parameters=("I1", "I2", "I3"),
+    condition="a real body: I1, I2, I3 > 0 and I1 + I2 ≥ I3, I2 + I3 ≥ I1, I3 + I1 ≥ I2, the triangle "
+              "inequalities that the solvers require",
+    draw=_draw_free_top,
+    refusal=_free_top_refusal,
+    widths=(1.2,),
+)
 
 
 def _free_top() -> System:
@@ -322,6 +418,7 @@ def _free_top() -> System:
         highest=highest,
         quantities=qs,
         domain={},
+        region=_FREE_TOP_REGION,
         hints={"L": lsq, "L2": lsq, "L1": lsq, "L3": lsq, "L_sq": lsq, "E": "the energy of the free top is T",
                "theta": euler_angles, "phi": euler_angles, "psi": euler_angles,
                "Omega": "define it with --given, e.g. --given 'Omega = omega3*(I1 - I3)/I1'"},
