@@ -108,7 +108,7 @@ def _falling_cat_claim():
 def test_falling_cat_is_constructed_with_zero_L_as_evidence():
     result = evaluate(_falling_cat_claim())
     assert result.status == "constructed", result.detail
-    assert "by construction" in result.note and "root-found" in result.note
+    assert "by construction" in result.note and "root-found" in result.note and "L = 0" in result.note
     assert result.detail.startswith("evidence: max |L| =")
     assert result.as_dict()["note"] == result.note
 
@@ -185,7 +185,7 @@ def test_verify_constructed_is_not_a_failure(monkeypatch, capsys):
     assert main(["verify", "--section", "3.1"]) == 0
     out = capsys.readouterr().out
     assert "2 claims: 1 verified, 0 misprint, 1 constructed, 0 failed" in out
-    assert "(0.0) constructed — the parameter was chosen to make it hold: evidence: an independent" in out
+    assert "(0.0) constructed — the parameter was chosen to make it hold; evidence: an independent" in out
     assert main(["verify", "--section", "3.1", "--json"]) == 0
     rows = json.loads(capsys.readouterr().out)
     assert [(r["status"], r["note"]) for r in rows] == [("constructed", "the parameter was chosen to make it hold"),

@@ -782,7 +782,7 @@ def _cat_outcome(formula: Any, cat: Any) -> Outcome:
     if abs(angle - want_angle) > 1e-8 or abs(L - want_L) > 1e-10:
         return Outcome(False, f"the cat turns by {angle:.12f} rad (claimed {want_angle:.12f}) with max |L| = {L:.2g} "
                               f"(claimed {want_L:.2g})")
-    return Outcome(True, f"max |L| = {L:.1e} kg m²/s over the flip (from r_i = R r̃_i, independent of Ω); "
+    return Outcome(True, f"max |L| = {L:.1e} kg m²/s over the flip (by differences of r_i = R r̃_i, not from Ω); "
                          f"the flip angle is π to {abs(angle - want_angle):.1e} rad")
 
 
@@ -797,6 +797,6 @@ register(Claim(
     printed=lambda: (sp.pi, sp.Integer(0)),
     check=_check_cat,
     parts=("flip angle", "max |L|"),
-    constructed="the turn by π holds by construction (the peak bend is root-found so the net rotation is a "
-                "half turn); the evidence is |L| = 0 throughout, measured from the run",
+    constructed="the turn by π holds by construction: the peak bend is root-found so that the net rotation is a "
+                "half turn; what is measured is L = 0 throughout the run",
 ))

@@ -50,8 +50,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"\n{len(rows)} claims: {counts} in {total:.1f} s")
         for r in rows:
             if r.status != "verified":
-                note = f" — {r.note}" if r.note else ""
-                print(f"  ({r.equation}) {r.status}{note}: {r.detail}")
+                head = f"{r.status} — {r.note};" if r.note else f"{r.status}:"
+                print(f"  ({r.equation}) {head} {r.detail}")
     return 1 if failed else 0
 
 
