@@ -112,7 +112,7 @@ def _check_3_17(f):
 register(Claim(
     "3.17", "3.2",
     "T = ½Σm ṙ² = ½Σm (ω×r)·(ω×r) = ½Σm ((ω·ω)(r·r) - (r·ω)²) for a rotating body",
-    "symbolic", printed=_printed_3_17, check=_check_3_17,
+    "symbolic", printed=_printed_3_17, check=_check_3_17, parts=("line 2", "line 3"),
 ))
 
 
@@ -226,7 +226,7 @@ def _check_3_23(f):
 register(Claim(
     "3.23", "3.2",
     "uniform rod of length l about its centre: I = diag(I1, I1, 0), I1 = ∫ρx²dx = M l²/12",
-    "symbolic", printed=_printed_3_23, check=_check_3_23,
+    "symbolic", printed=_printed_3_23, check=_check_3_23, parts=("∫ρx²dx", "I1 = Ml²/12"),
 ))
 
 
@@ -247,7 +247,7 @@ def _check_3_24(f):
 register(Claim(
     "3.24", "3.2",
     "uniform disc of radius R (the text's r): I3 = 2πρ∫r'³dr' = ½MR², I1 = I2 = ¼MR²",
-    "symbolic", printed=_printed_3_24, check=_check_3_24,
+    "symbolic", printed=_printed_3_24, check=_check_3_24, parts=("I3", "I1", "I2", "2πρ∫r'³dr'"),
 ))
 
 
@@ -300,7 +300,7 @@ def _check_3_26(f):
 register(Claim(
     "3.26", "3.2.1",
     "expansion of I about r_i - c; the bracket linear in r_i vanishes when Σ m_i r_i = 0",
-    "symbolic", printed=_printed_3_26, check=_check_3_26,
+    "symbolic", printed=_printed_3_26, check=_check_3_26, parts=("expansion", "bracket"),
 ))
 
 
@@ -324,6 +324,7 @@ register(Claim(
     "3.2.1 rod about its end", "3.2.1",
     "the rod about one end: I1 = M l²/12 + M (l/2)² = M l²/3",
     "symbolic", printed=lambda: (M * l**2 / 12 + M * (l / 2) ** 2, M * l**2 / 3), check=_check_rod_end,
+    parts=("Ml²/12 + M(l/2)²", "Ml²/3"),
 ))
 
 
@@ -346,6 +347,7 @@ register(Claim(
     "3.2.1 disc displaced", "3.2.1",
     "the disc about a point displaced by c = (c, 0, 0): I = M diag(R²/4, R²/4 + c², R²/2 + c²)",
     "symbolic", printed=_printed_disc_displaced, check=_check_disc_displaced,
+    parts=("intermediate form", "result"),
 ))
 
 
@@ -367,7 +369,7 @@ def _check_3_27(f):
 register(Claim(
     "3.27", "3.2.2",
     "L = Σm r×ṙ = Σm r×(ω×r) = Σm(r²ω - (ω·r)r) = I ω",
-    "symbolic", printed=_printed_3_27, check=_check_3_27,
+    "symbolic", printed=_printed_3_27, check=_check_3_27, parts=("Σm r×(ω×r)", "Σm(r²ω − (ω·r)r)", "Iω"),
 ))
 
 

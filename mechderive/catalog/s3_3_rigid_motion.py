@@ -48,5 +48,5 @@ def _check_3_30(f):
 register(Claim(
     "3.30", "3.3",
     "with r_i = R + Δr_i (3.29) and Σ m Δr_i = 0: T = ½MṘ² + ½ω_a I_ab ω_b (centre of mass + rotation)",
-    "symbolic", printed=_printed_3_30, check=_check_3_30,
+    "symbolic", printed=_printed_3_30, check=_check_3_30, parts=("line 2", "line 3"),
 ))

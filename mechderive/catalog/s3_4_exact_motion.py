@@ -9,6 +9,8 @@ against mpmath integrations of Euler's equations (3.33), independent of the clos
 
 from __future__ import annotations
 
+import functools
+
 import mpmath
 import numpy as np
 import sympy as sp
@@ -21,13 +23,14 @@ _P, _Q, _S = sp.symbols("P Q S", real=True)
 _sn, _cn, _dn = (sp.Function(name) for name in ("sn", "cn", "dn"))
 
 
-def _integrate(t_end: float, dps: int = 20) -> list:
-    """ω(t_end) from an mpmath Taylor integration of Euler's equations (3.33) at ``dps`` digits."""
+@functools.cache
+def _integrate(t_end: float, dps: int = 20) -> tuple[float, ...]:
+    """ω(t_end) from an mpmath Taylor integration of Euler's equations (3.33) at ``dps`` digits (kept: a reference)."""
     (I1, I2, I3), w0 = _CASE
     with mpmath.workdps(dps):
         f = lambda t, w: [(I2 - I3) * w[1] * w[2] / I1, (I3 - I1) * w[2] * w[0] / I2, (I1 - I2) * w[0] * w[1] / I3]
         sol = mpmath.odefun(f, 0, [mpmath.mpf(x) for x in w0])
-        return [float(x) for x in sol(mpmath.mpf(t_end))]
+        return tuple(float(x) for x in sol(mpmath.mpf(t_end)))
 
 
 def _printed_solution() -> sp.Matrix:

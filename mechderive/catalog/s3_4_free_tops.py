@@ -199,6 +199,7 @@ register(Claim(
     "symbolic",
     printed=lambda: (sp.Integer(0), sp.sqrt(_printed_A() / I2), -sp.sqrt(_printed_A() / I2)),
     check=_check_eigenvalues,
+    parts=("0", "+√(A/I2)", "−√(A/I2)"),
 ))
 
 
@@ -244,7 +245,8 @@ register(Claim(
     "numeric",
     printed=lambda: {"largest": "stable", "intermediate": "unstable", "smallest": "stable"},
     check=_check_axes,
-    perturbed=lambda: {"largest": "unstable", "intermediate": "unstable", "smallest": "stable"},
+    perturbed=lambda: {"largest": "unstable", "intermediate": "stable", "smallest": "unstable"},  # each flipped
+    parts=("largest", "intermediate", "smallest"),
 ))
 
 # ----------------------------------------------------------------------------- 3.4.4: Poinsot

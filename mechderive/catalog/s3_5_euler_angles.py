@@ -137,10 +137,11 @@ register(Claim(
     "3.57", "3.5.2",
     "ẽ3 = sin θ sin ψ e1 + sin θ cos ψ e2 + cos θ e3 and e'1 = cos ψ e1 - sin ψ e2",
     "symbolic",
-    printed=lambda: sp.Matrix.hstack(
-        sp.Matrix([sp.sin(theta) * sp.sin(psi), sp.sin(theta) * sp.cos(psi), sp.cos(theta)]),
-        sp.Matrix([sp.cos(psi), -sp.sin(psi), 0])),
-    check=lambda f: same(f, sp.Matrix.hstack(_e3_space_in_body(), _line_of_nodes_in_body()), "(ẽ3, e'1) in body axes"),
+    printed=lambda: (sp.Matrix([sp.sin(theta) * sp.sin(psi), sp.sin(theta) * sp.cos(psi), sp.cos(theta)]),
+                     sp.Matrix([sp.cos(psi), -sp.sin(psi), 0])),
+    check=lambda f: same(sp.Matrix.hstack(*f), sp.Matrix.hstack(_e3_space_in_body(), _line_of_nodes_in_body()),
+                         "(ẽ3, e'1) in body axes"),
+    parts=("ẽ3", "e'1"),
 ))
 
 register(Claim(

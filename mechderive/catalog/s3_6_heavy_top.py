@@ -19,6 +19,8 @@ spin, and the two rates have opposite signs.  At θ0 = π/2 (3.80) is linear: on
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import sympy as sp
 
@@ -79,6 +81,7 @@ register(Claim(
              "first line with ω from (3.58) vs ½ωᵀIω − V"),
         same(f[1], _m().state_lagrangian, "second line vs ½ωᵀIω − V"),
     ]),
+    parts=("in ω", "in Euler angles"),
 ))
 
 
@@ -94,6 +97,8 @@ register(Claim(
     "symbolic",
     printed=lambda: (coordinate("psi"), coordinate("phi")),
     check=_check_ignorable,
+    perturbed=lambda: (coordinate("theta"), coordinate("theta")),  # the coordinate that is not ignorable
+    parts=("ψ", "φ"),
 ))
 
 register(Claim(
@@ -103,6 +108,7 @@ register(Claim(
     printed=lambda: (I3 * (psi_dot + c(theta) * phi_dot), I3 * omega3),
     check=lambda f: all_pass([same(f[0], _m().spin_momentum, "p_ψ vs ∂L/∂ψ̇"),
                               same(_spin_derived(f[1]), _m().spin_momentum, "I3ω3 vs ∂L/∂ψ̇")]),
+    parts=("I3(ψ̇ + cos θ φ̇)", "I3ω3"),
 ))
 
 register(Claim(
@@ -134,8 +140,12 @@ register(Claim(
     "symbolic",
     printed=_printed_constants,
     check=lambda f: _conserved([f[0], f[1], _spin_derived(f[2])], "p_ψ, p_φ, E"),
-    # a wrong constant: I3ψ̇ alone (ψ̇ = ω3 − φ̇ cos θ changes as θ and φ̇ do)
-    perturbed=lambda: (I3 * psi_dot, *_printed_constants()[1:]),
+    # An affine image of a constant is a constant, so perturb() cannot make these wrong; instead drop a
+    # term: I3ψ̇ (ψ̇ = ω3 − φ̇ cos θ changes as θ and φ̇ do), p_φ without the spin's share I3ω3 cos θ,
+    # E without the potential energy (each exchanges with the dropped term as θ changes).
+    perturbed=lambda: (I3 * psi_dot, I1 * s(theta) ** 2 * phi_dot,
+                       I1 * (theta_dot**2 + phi_dot**2 * s(theta) ** 2) / 2 + I3 * omega3**2 / 2),
+    parts=("p_ψ", "p_φ", "E"),
 ))
 
 register(Claim(
@@ -145,7 +155,9 @@ register(Claim(
     printed=lambda: (I3 * omega3 / I1, sp.Symbol("p_phi", real=True) / I1),
     check=lambda f: _conserved([_spin_derived(f[0]), f[1].subs(sp.Symbol("p_phi", real=True),
                                                                 _m().azimuthal_momentum)], "a, b"),
-    perturbed=lambda: (I3 * psi_dot / I1, sp.Symbol("p_phi", real=True) / I1),
+    # affine images of a, b are constants too (see 3.65 conserved): a with ψ̇ for ω3, b with a factor cos θ
+    perturbed=lambda: (I3 * psi_dot / I1, sp.Symbol("p_phi", real=True) * c(theta) / I1),
+    parts=("a", "b"),
 ))
 
 register(Claim(
@@ -242,7 +254,8 @@ register(Claim(
     "symbolic",
     printed=lambda: (sp.oo, -sp.oo),
     check=_check_limits,
-    perturbed=lambda: (-sp.oo, sp.oo),
+    perturbed=lambda: (-sp.oo, sp.oo),  # perturb() leaves ±∞ unchanged: flip each sign
+    parts=("u → ∞", "u → −∞"),
 ))
 
 register(Claim(
@@ -251,6 +264,7 @@ register(Claim(
     "symbolic",
     printed=lambda: (-(b - a) ** 2, -(b + a) ** 2),
     check=lambda f: same(sp.Matrix(f), sp.Matrix(_m().f_at_poles), "(f(1), f(−1))"),
+    parts=("f(1)", "f(−1)"),
 ))
 
 
@@ -281,20 +295,30 @@ def _roots_and_ab(rows: np.ndarray) -> tuple[list[np.ndarray], np.ndarray]:
     return [np.roots(cf) for cf in coeffs], ab
 
 
-def _check_two_roots(f) -> Outcome:
-    """Count f's real roots in [−1, 1] and above 1 at random states (an imaginary part < 1e-9 is real:
-    np.roots is accurate to ~1e-13 for these well-separated roots)."""
+@functools.cache
+def _root_counts() -> list[tuple[np.ndarray, np.ndarray, tuple[int, int], bool]]:
+    """At each random state: (state, real roots of f, (roots in [−1, 1], above 1), whether the two inside bracket
+    u = cos θ).  An imaginary part < 1e-9 is real: np.roots is accurate to ~1e-13 for these well-separated roots.
+    Computed once per session."""
     rows = _random_states(376)
     roots, _ = _roots_and_ab(rows)
+    out = []
     for row, r in zip(rows, roots):
         real = np.sort(r[np.abs(r.imag) < 1e-9].real)
         inside, above = real[(real >= -1) & (real <= 1)], real[real > 1]
         u_now = np.cos(row[5])
-        counts = (len(inside), len(above))
-        if counts != tuple(f) or not (len(inside) == 2 and inside[0] < u_now < inside[1]):
+        out.append((row, real, (len(inside), len(above)), len(inside) == 2 and inside[0] < u_now < inside[1]))
+    return out
+
+
+def _check_two_roots(f) -> Outcome:
+    """Count f's real roots in [−1, 1] and above 1 at random states."""
+    states = _root_counts()
+    for row, real, counts, brackets in states:
+        if counts != tuple(f) or not brackets:
             return Outcome(False, f"at state {np.round(row, 3).tolist()}: roots {np.round(real, 6).tolist()}, "
                                   f"(in [−1, 1], above 1) = {counts}, printed {tuple(f)}")
-    return Outcome(True, f"{len(rows)} random states: two roots of f in [−1, 1] bracketing u = cos θ, one above 1")
+    return Outcome(True, f"{len(states)} random states: two roots of f in [−1, 1] bracketing u = cos θ, one above 1")
 
 
 register(Claim(
@@ -303,10 +327,13 @@ register(Claim(
     "numeric",
     printed=lambda: (2, 1),
     check=_check_two_roots,
+    perturbed=lambda: (3, 0),  # all three roots in [−1, 1]; none above 1
+    parts=("roots in [−1, 1]", "roots above 1"),
 ))
 
 
-def _kinds_of_motion() -> tuple[set, str]:
+@functools.cache
+def _kinds_of_motion() -> tuple[frozenset, str]:
     """The sign patterns (sign φ̇(u1), sign φ̇(u2)) met at random states, φ̇ = (b − au)/(1 − u²) (3.74).
 
     Reflecting φ → −φ, ψ → −ψ flips a, b and hence φ̇ everywhere, so patterns are normalised to
@@ -324,7 +351,7 @@ def _kinds_of_motion() -> tuple[set, str]:
             if sign[0] < 0:
                 sign = [-x for x in sign]
             patterns.add(tuple(sign))
-    return patterns, f"{2 * _N_STATES} random states, half released at rest in θ and φ"
+    return frozenset(patterns), f"{2 * _N_STATES} random states, half released at rest in θ and φ"
 
 
 def _check_three_kinds(f) -> Outcome:
@@ -343,6 +370,9 @@ register(Claim(
     "numeric",
     printed=lambda: [(1, 1), (1, -1), (1, 0)],
     check=_check_three_kinds,
+    # kinds that do not occur: φ̇ vanishing at the lower root, the reflected pattern, φ̇ = 0 at both roots
+    perturbed=lambda: [(0, 1), (-1, 1), (0, 0)],
+    parts=("(+, +)", "(+, −)", "(+, 0)"),
 ))
 
 
@@ -376,11 +406,13 @@ register(Claim(
     printed=lambda: (I1 * phi_dot * s(theta) ** 2 + I3 * omega3 * c(theta), I3 * omega3 * c(theta)),
     check=lambda f: all_pass([same(f[0], _m().azimuthal_momentum_spin, "p_φ in ω3"),
                               same(f[1], _m().released_azimuthal_momentum, "p_φ at φ̇ = 0")]),
+    parts=("p_φ", "p_φ at release"),
 ))
 
 
-def _check_released_motion(f) -> Outcome:
-    """θ̈ at release (derived equations) and sign(φ̇)·sign(a) for u below u0, at seeded random points."""
+@functools.cache
+def _released_signs() -> dict[str, frozenset]:
+    """The signs met at seeded random points (once per session): θ̈ at release, φ̇·a for u below u0."""
     m = _m()
     rng = np.random.default_rng(378)
     acc = compile_expressions(m.accelerations[1], [*ht.PARAMETERS, *ht.STATE], name="heavy_top_theta_ddot")
@@ -391,7 +423,13 @@ def _check_released_motion(f) -> Outcome:
     u0v = rng.uniform(-0.95, 0.95, 500)
     uv = u0v - rng.uniform(0.01, 1.0, 500) * (u0v + 1)
     sign_precession = set(np.sign(rate(av, u0v, uv) * av).astype(int).tolist())
-    seen = {"theta_ddot": sign_fall, "phi_dot_times_spin": sign_precession}
+    return {"theta_ddot": frozenset(sign_fall), "phi_dot_times_spin": frozenset(sign_precession)}
+
+
+def _check_released_motion(f) -> Outcome:
+    """θ̈ at release (derived equations) and sign(φ̇)·sign(a) for u below u0, at seeded random points."""
+    seen = _released_signs()
+    sign_fall, sign_precession = seen["theta_ddot"], seen["phi_dot_times_spin"]
     ok = all(seen[k] == {f[k]} for k in seen)
     return Outcome(ok, f"signs seen: θ̈ at release {sorted(sign_fall)}, φ̇·ω3 for u < u0 {sorted(sign_precession)}; "
                        f"printed {f}")
@@ -404,6 +442,8 @@ register(Claim(
     "numeric",
     printed=lambda: {"theta_ddot": 1, "phi_dot_times_spin": 1},
     check=_check_released_motion,
+    perturbed=lambda: {"theta_ddot": -1, "phi_dot_times_spin": -1},  # rises; precesses against the spin
+    parts=("sign of θ̈", "sign of φ̇ω3"),
 ))
 
 
@@ -419,6 +459,7 @@ register(Claim(
     printed=lambda: ((1 - u0**2) * (alpha - beta * u0) - (b - a * u0) ** 2,
                      -2 * u0 * (alpha - beta * u0) - beta * (1 - u0**2) + 2 * a * (b - a * u0)),
     check=lambda f: same(sp.Matrix(f), sp.Matrix(_m().double_root_conditions), "(f(u0), f'(u0))"),
+    parts=("f(u0)", "f'(u0)"),
 ))
 
 register(Claim(
@@ -540,6 +581,7 @@ register(Claim(
     printed=lambda: {b: a, beta: alpha},
     check=lambda f: same(sp.Matrix([f[b], f[beta]]), sp.Matrix([_m().sleeping_constants[b], _m().sleeping_constants[beta]]),
                          "(b, β) at θ = θ̇ = 0"),
+    parts=("b", "β"),
 ))
 
 register(Claim(

@@ -16,7 +16,11 @@ def add_parser(sub: "argparse._SubParsersAction") -> None:
         "verify",
         help="check the chapter's equations against the toolkit's derivations",
         description="Run every catalog check (or those of one section) and print a table; "
-        "exit status 1 if any check fails.",
+        "exit status 1 if any check fails.  Statuses: verified (the printed formula agrees with the "
+        "derivation), misprint (it does not, and the entry's corrected formula does), constructed (the "
+        "claim holds by construction, e.g. a parameter root-found to make it true; the check passes on "
+        "independent evidence from the same run, and the row's note says what was constructed — not a "
+        "failure), failed (anything else).",
     )
     p.add_argument("--section", metavar="S", help="only this section and its subsections, e.g. 3.2 or 3.5.2")
     p.add_argument("--json", action="store_true", help="print the rows as a JSON list instead of a table")
@@ -24,7 +28,7 @@ def add_parser(sub: "argparse._SubParsersAction") -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..catalog.registry import all_claims, run_claims
+    from ..catalog.registry import STATUSES, all_claims, run_claims
 
     claims = all_claims(args.section)
     if not claims:
@@ -42,12 +46,12 @@ def run(args: argparse.Namespace) -> int:
         json.dump([r.as_dict() for r in rows], sys.stdout, indent=1, ensure_ascii=False)
         print()
     else:
-        counts = {s: sum(r.status == s for r in rows) for s in ("verified", "misprint", "failed")}
-        print(f"\n{len(rows)} claims: {counts['verified']} verified, {counts['misprint']} misprint, "
-              f"{counts['failed']} failed in {total:.1f} s")
+        counts = ", ".join(f"{sum(r.status == s for r in rows)} {s}" for s in STATUSES)
+        print(f"\n{len(rows)} claims: {counts} in {total:.1f} s")
         for r in rows:
             if r.status != "verified":
-                print(f"  ({r.equation}) {r.status}: {r.detail}")
+                head = f"{r.status} — {r.note};" if r.note else f"{r.status}:"
+                print(f"  ({r.equation}) {head} {r.detail}")
     return 1 if failed else 0
 
 
@@ -57,8 +61,8 @@ _HEADER_DONE = False
 def _print_row(r) -> None:
     global _HEADER_DONE
     if not _HEADER_DONE:
-        print(f"{'equation':<22} {'section':<7} {'method':<11} {'status':<9} {'sec':>6}  claim")
-        print("-" * 100)
+        print(f"{'equation':<22} {'section':<7} {'method':<11} {'status':<11} {'sec':>6}  claim")
+        print("-" * 102)
         _HEADER_DONE = True
     claim = textwrap.shorten(r.claim, 90, placeholder="…")
-    print(f"{r.equation:<22} {r.section:<7} {r.method:<11} {r.status:<9} {r.seconds:6.2f}  {claim}", flush=True)
+    print(f"{r.equation:<22} {r.section:<7} {r.method:<11} {r.status:<11} {r.seconds:6.2f}  {claim}", flush=True)
