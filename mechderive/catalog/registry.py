@@ -29,6 +29,8 @@ import time
 from dataclasses import dataclass
 from typing import Any, Callable, Iterable
 
+from ..errors import InvalidInputError
+
 __all__ = ["Outcome", "Claim", "ClaimResult", "register", "all_claims", "run_claims", "print_claims", "perturb",
            "member_count", "member_of", "with_member", "STATUSES", "SECTION_MODULES"]
 
@@ -109,9 +111,9 @@ class Claim:
 
     def __post_init__(self) -> None:
         if self.method not in ("symbolic", "numeric", "integration"):
-            raise ValueError(f"expected method 'symbolic', 'numeric' or 'integration', got {self.method!r}")
+            raise InvalidInputError(f"expected method 'symbolic', 'numeric' or 'integration', got {self.method!r}")
         if len(self.parts) == 1:
-            raise ValueError(f"expected no parts (one formula) or at least two, got {self.parts!r}")
+            raise InvalidInputError(f"expected no parts (one formula) or at least two, got {self.parts!r}")
 
     def passing_form(self) -> Any:
         """The formula that must pass its check: the corrected one for a misprint, else the printed one."""
@@ -131,7 +133,7 @@ class Claim:
             formula = self.passing_form()
         n = member_count(formula)
         if n != len(self.member_names()):
-            raise ValueError(f"({self.equation}): expected {len(self.member_names())} members "
+            raise InvalidInputError(f"({self.equation}): expected {len(self.member_names())} members "
                              f"({', '.join(self.member_names())}), got a formula with {n}")
         if not self.parts:
             return [(self.equation, self.perturbed() if self.perturbed is not None else perturb(formula))]
@@ -256,7 +258,7 @@ def member_of(formula: Any, k: int) -> Any:
     if isinstance(formula, (tuple, list)):
         return formula[k]
     if k != 0:
-        raise IndexError(f"expected member 0 of a single formula, got {k}")
+        raise InvalidInputError(f"expected member 0 of a single formula, got {k}")
     return formula
 
 
@@ -268,7 +270,7 @@ def with_member(formula: Any, k: int, value: Any) -> Any:
     if isinstance(formula, (tuple, list)):
         return type(formula)([*formula[:k], value, *formula[k + 1:]])
     if k != 0:
-        raise IndexError(f"expected member 0 of a single formula, got {k}")
+        raise InvalidInputError(f"expected member 0 of a single formula, got {k}")
     return value
 
 
@@ -287,13 +289,13 @@ def perturb(formula: Any, member: int | None = None, *, entry: int = 0) -> Any:
     if isinstance(formula, sp.MatrixBase):
         m = sp.Matrix(formula)
         if not 0 <= entry < len(m):
-            raise IndexError(f"expected an entry in [0, {len(m)}), got {entry}")
+            raise InvalidInputError(f"expected an entry in [0, {len(m)}), got {entry}")
         m[entry] = perturb(m[entry])
         return m
     if isinstance(formula, (dict, list, tuple)):
         return perturb(formula, 0, entry=entry)
     if entry != 0:
-        raise IndexError(f"expected entry 0 of a formula that is not a matrix, got {entry}")
+        raise InvalidInputError(f"expected entry 0 of a formula that is not a matrix, got {entry}")
     if isinstance(formula, sp.Equality):
         return sp.Eq(formula.lhs, perturb(formula.rhs), evaluate=False)
     expr = sp.sympify(formula)
