@@ -98,6 +98,24 @@ class CompiledSplitting:
         self._run(y0, par, len(intervals), counts, steps, float(head), len(stages), drift, kick, out)
         return out
 
+    def propagate_steps(self, y0: Sequence[float], params: Sequence[float], step: float, n_steps: int,
+                        weights: Sequence[float]) -> np.ndarray:
+        """The state after every one of ``n_steps`` composed steps of size ``step``, shape (n_steps + 1, n).
+
+        The same steps as one interval of :meth:`propagate`, each one its own interval (the trailing
+        kick of a step and the leading kick of the next are then applied separately: the same to rounding).
+        """
+        head, stages = kdk_schedule(weights)
+        y0 = np.ascontiguousarray(y0, dtype=float)
+        par = np.ascontiguousarray(params, dtype=float)
+        counts = np.ones(n_steps, dtype=np.int64)
+        steps = np.full(n_steps, float(step))
+        drift = np.ascontiguousarray([d for d, _ in stages], dtype=float)
+        kick = np.ascontiguousarray([k for _, k in stages], dtype=float)
+        out = np.empty((n_steps + 1, self.n))
+        self._run(y0, par, n_steps, counts, steps, float(head), len(stages), drift, kick, out)
+        return out
+
 
 def compiled_splitting(name: str, build: Callable[[], tuple]) -> CompiledSplitting | None:
     """The compiled splitting ``name``, or None without a usable C compiler.
