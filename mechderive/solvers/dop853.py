@@ -87,7 +87,7 @@ def _solve_scipy(fun: Callable[[float, np.ndarray], Any], t: np.ndarray, y0: np.
     if track is not None:
         tracker = HalfAngleTracker(y0, solver.f, track[0], track[1])
         args = np.empty((t.size, 2))
-        args[0] = tracker.arg
+        args[0] = tracker.args_at(y0)
     k, steps = 1, 0
     while k < t.size:
         solver.step()

@@ -98,7 +98,8 @@ static double initial_step(const double *y0, const double *f0, const double *par
 
 typedef struct {
     int qoff;              /* index of q0 in y */
-    double arg[2];         /* continuous arguments at the current point */
+    double offset[2];      /* continuous argument = atan2(z) + offset where z != 0 */
+    double held[2];        /* the continuous argument while z = 0 exactly */
     double closest[2];     /* smallest lower bound of |z| met (0: a piece not resolved) */
     int departing[2];      /* z(0) = 0 exactly: the first step leaves it along z'(0) */
     double speed[2];       /* bound of |dz/dt| on the current step */
@@ -165,7 +166,12 @@ static void track_pairs(const Track *tr, const double *y, double z[2][2])
 
 static double wrap_pi(double x) { return x - TWO_PI * nearbyint(x / TWO_PI); }
 
-static void track_start(Track *tr, const double *y0, const double *f0)
+static double track_arg(const Track *tr, int p, const double z[2])
+{
+    return (z[0] * z[0] + z[1] * z[1] == 0.0) ? tr->held[p] : atan2(z[1], z[0]) + tr->offset[p];
+}
+
+static void track_start(Track *tr, const double *y0, const double *f0, const double *args0)
 {
     double z[2][2], zd[2][2];
     track_pairs(tr, y0, z);
@@ -173,33 +179,47 @@ static void track_start(Track *tr, const double *y0, const double *f0)
     for (int p = 0; p < 2; p++) {
         tr->closest[p] = INFINITY;
         tr->departing[p] = 0;
+        tr->offset[p] = 0.0;
+        tr->held[p] = args0[p];
         for (int k = 0; k < NDEC; k++) { tr->near[p][k] = 0.0; tr->inside[p][k] = 0; }
-        if (z[p][0] == 0.0 && z[p][1] == 0.0 && (zd[p][0] != 0.0 || zd[p][1] != 0.0)) {
-            tr->arg[p] = atan2(zd[p][1], zd[p][0]);
+        if (z[p][0] * z[p][0] + z[p][1] * z[p][1] != 0.0) {
+            tr->offset[p] = args0[p] - atan2(z[p][1], z[p][0]);
+        } else if (zd[p][0] != 0.0 || zd[p][1] != 0.0) {
+            tr->held[p] = atan2(zd[p][1], zd[p][0]);
             tr->departing[p] = 1;
         }
     }
 }
 
-/* the piece [xa, xb] of the step: halve until the change of each argument is certain */
+/* 2 pi k keeping atan2(z) + 2 pi k continuous along the chord za -> zb: it meets y = 0 at
+   x = (za x zb)/(yb - ya), negative iff the cross product and yb - ya have opposite signs */
+static double track_crossing(const double za[2], const double zb[2])
+{
+    int below_a = signbit(za[1]) != 0, below_b = signbit(zb[1]) != 0;
+    if (below_a == below_b) return 0.0;
+    double cross = za[0] * zb[1] - za[1] * zb[0];
+    if (!below_a && cross > 0.0) return TWO_PI;
+    if (below_a && cross < 0.0) return -TWO_PI;
+    return 0.0;
+}
+
+/* the piece [xa, xb] of the step: halve until the turn of each argument is certain */
 static void track_piece(Track *tr, Step *st, double xa, double za[2][2], double xb, double zb[2][2], int depth)
 {
-    double d[2] = {0.0, 0.0}, rho[2] = {0.0, 0.0};
+    double rho[2] = {0.0, 0.0};
     int ok[2] = {1, 1}, touch[2] = {0, 0};   /* touch: 1 leaving z = 0, 2 arriving, 3 at 0 throughout */
     for (int p = 0; p < 2; p++) {
-        double ra = hypot(za[p][0], za[p][1]), rb = hypot(zb[p][0], zb[p][1]);
-        if (ra == 0.0 && rb == 0.0) {
-            touch[p] = 3;
-        } else if (ra == 0.0) {
-            touch[p] = 1; ok[p] = 0;
-            d[p] = wrap_pi(atan2(zb[p][1], zb[p][0]) - tr->arg[p]);
-        } else if (rb == 0.0) {
-            touch[p] = 2; ok[p] = 0;
+        /* |q| ~ 1: no overflow; a |z| below 1e-154 squares to 0 and counts as z = 0 */
+        double ra2 = za[p][0] * za[p][0] + za[p][1] * za[p][1];
+        double rb2 = zb[p][0] * zb[p][0] + zb[p][1] * zb[p][1];
+        if (ra2 == 0.0 || rb2 == 0.0) {
+            touch[p] = ra2 == rb2 ? 3 : (ra2 == 0.0 ? 1 : 2);
+            ok[p] = touch[p] == 3;
         } else {
             double length = tr->speed[p] * st->h * (xb - xa);
-            d[p] = wrap_pi(atan2(zb[p][1], zb[p][0]) - atan2(za[p][1], za[p][0]));
-            rho[p] = 0.5 * (ra + rb - length);
-            ok[p] = rho[p] > 0.0 && length < (TWO_PI - fabs(d[p])) * rho[p];
+            rho[p] = 0.5 * (sqrt(ra2) + sqrt(rb2) - length);
+            /* the path stays at |z| >= rho, so turns by <= length/rho < pi: the chord's turn */
+            ok[p] = rho[p] > 0.0 && length < 0.5 * TWO_PI * rho[p];
         }
     }
     if (!(ok[0] && ok[1]) && depth < TRACK_DEPTH) {
@@ -211,12 +231,19 @@ static void track_piece(Track *tr, Step *st, double xa, double za[2][2], double 
         return;
     }
     for (int p = 0; p < 2; p++) {
+        if (touch[p] == 1) {           /* leaving z = 0: the turn from the held argument, wrapped */
+            double a = atan2(zb[p][1], zb[p][0]);
+            tr->offset[p] = tr->held[p] + wrap_pi(a - tr->held[p]) - a;
+        } else if (touch[p] == 2) {
+            tr->held[p] = atan2(za[p][1], za[p][0]) + tr->offset[p];
+        } else if (touch[p] == 0) {
+            tr->offset[p] += track_crossing(za[p], zb[p]);
+        }
         if (touch[p] == 3 || (touch[p] == 1 && tr->departing[p])) {
             /* held at z = 0, or leaving it at the start along z'(0): not a passage */
         } else if (!tr->departing[p]) {
             track_approach(tr, p, ok[p] ? rho[p] : 0.0);
         }
-        tr->arg[p] += d[p];
     }
 }
 
@@ -240,9 +267,11 @@ int dop853_solve(const double *par, const double *y0, int n_out, const double *t
     if (n_out < 2) { stats[0] = stats[1] = stats[2] = 0; return 0; }
     rhs(y, par, K[0]); nfev++;
     if (qoff >= 0) {
-        tr.qoff = qoff; tr.arg[0] = arg_out[0]; tr.arg[1] = arg_out[1];
-        track_start(&tr, y, K[0]);
-        arg_out[0] = tr.arg[0]; arg_out[1] = tr.arg[1];
+        double args0[2] = {arg_out[0], arg_out[1]}, z0[2][2];
+        tr.qoff = qoff;
+        track_start(&tr, y, K[0], args0);
+        track_pairs(&tr, y, z0);
+        arg_out[0] = track_arg(&tr, 0, z0[0]); arg_out[1] = track_arg(&tr, 1, z0[1]);
     }
     double h_abs = *h_inout > 0 ? *h_inout : initial_step(y, K[0], par, t_end - t, rtol, atol, &nfev);
     while (k < n_out) {
@@ -288,9 +317,10 @@ int dop853_solve(const double *par, const double *y0, int n_out, const double *t
         double xa = 0.0, za[2][2], zb[2][2];
         if (qoff >= 0) {
             for (int p = 0; p < 2; p++) {
-                double v = 0.0;
-                for (int s = 0; s <= NST; s++) v = fmax(v, hypot(K[s][qoff + (p ? 1 : 0)], K[s][qoff + (p ? 2 : 3)]));
-                tr.speed[p] = SPEED_MARGIN * v;
+                int i = qoff + (p ? 1 : 0), j = qoff + (p ? 2 : 3);
+                double v2 = 0.0;
+                for (int s = 0; s <= NST; s++) v2 = fmax(v2, K[s][i] * K[s][i] + K[s][j] * K[s][j]);
+                tr.speed[p] = SPEED_MARGIN * sqrt(v2);
             }
             track_pairs(&tr, y, za);
         }
@@ -306,7 +336,7 @@ int dop853_solve(const double *par, const double *y0, int n_out, const double *t
                     track_piece(&tr, &st, xa, za, x, zb, 0);
                     xa = x;
                     za[0][0] = zb[0][0]; za[0][1] = zb[0][1]; za[1][0] = zb[1][0]; za[1][1] = zb[1][1];
-                    arg_out[2L * k] = tr.arg[0]; arg_out[2L * k + 1] = tr.arg[1];
+                    arg_out[2L * k] = track_arg(&tr, 0, zb[0]); arg_out[2L * k + 1] = track_arg(&tr, 1, zb[1]);
                 }
             }
             k++;
@@ -315,7 +345,10 @@ int dop853_solve(const double *par, const double *y0, int n_out, const double *t
             track_pairs(&tr, y_new, zb);
             track_piece(&tr, &st, xa, za, 1.0, zb, 0);
             tr.departing[0] = tr.departing[1] = 0;
-            if (t_out[k - 1] == t_new) { arg_out[2L * (k - 1)] = tr.arg[0]; arg_out[2L * (k - 1) + 1] = tr.arg[1]; }
+            if (t_out[k - 1] == t_new) {
+                arg_out[2L * (k - 1)] = track_arg(&tr, 0, zb[0]);
+                arg_out[2L * (k - 1) + 1] = track_arg(&tr, 1, zb[1]);
+            }
         }
         t = t_new;
         for (int i = 0; i < NDIM; i++) {

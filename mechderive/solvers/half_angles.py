@@ -66,27 +66,62 @@ def _pairs(y: Sequence[float], qoff: int) -> tuple[tuple[float, float], tuple[fl
     return (float(y[qoff]), float(y[qoff + 3])), (float(y[qoff + 1]), float(y[qoff + 2]))
 
 
+def _below(y: float) -> bool:
+    """Below the real axis as atan2 sees it: atan2(-0.0, x < 0) = -π."""
+    return math.copysign(1.0, y) < 0.0
+
+
+def _crossing(za: Sequence[float], zb: Sequence[float]) -> float:
+    """2π k that keeps atan2(z) + 2π k continuous along the chord from za to zb (its negative-axis crossing).
+
+    The chord meets y = 0 at x = (za × zb)/(y_b - y_a), negative iff the cross product and y_b - y_a
+    have opposite signs; crossing it downwards atan2 jumps by -2π, upwards by +2π.
+    """
+    below_a, below_b = _below(za[1]), _below(zb[1])
+    if below_a == below_b:
+        return 0.0
+    cross = za[0] * zb[1] - za[1] * zb[0]
+    if not below_a and cross > 0.0:
+        return _TWO_PI
+    if below_a and cross < 0.0:
+        return -_TWO_PI
+    return 0.0
+
+
 class HalfAngleTracker:
     """Continuous arguments of z_A = q0 + i q3 and z_B = q1 + i q2 along accepted steps.
 
     ``qoff`` is the index of q0 in the state; ``args0`` the arguments (σ0, δ0) at the start (any
-    representatives: only their changes are tracked, except where z(0) = 0).
+    representatives of the arguments of z(0), except where z(0) = 0).  The continuous argument is
+    kept as atan2(z) + ``offset`` (``offset`` − its start a multiple of 2π: no rounding accumulates
+    over the steps), or ``held`` while z = 0 exactly.
     """
 
     def __init__(self, y0: Sequence[float], f0: Sequence[float], qoff: int, args0: Sequence[float]) -> None:
         self.qoff = qoff
-        self.arg = [float(args0[0]), float(args0[1])]
+        self.offset = [0.0, 0.0]
+        self.held = [float(args0[0]), float(args0[1])]
         self.closest = [math.inf, math.inf]
         self.near = np.zeros((2, DECADES), dtype=np.int64)
         self._inside = np.zeros((2, DECADES), dtype=bool)
         self.departing = [False, False]
         for p, (z, zdot) in enumerate(zip(_pairs(y0, qoff), _pairs(f0, qoff))):
-            if z == (0.0, 0.0) and zdot != (0.0, 0.0):
-                self.arg[p] = math.atan2(zdot[1], zdot[0])
+            if z[0] * z[0] + z[1] * z[1] != 0.0:
+                self.offset[p] = self.held[p] - math.atan2(z[1], z[0])
+            elif zdot != (0.0, 0.0):
+                self.held[p] = math.atan2(zdot[1], zdot[0])
                 self.departing[p] = True
         self.speed = [0.0, 0.0]
         self._h = 0.0
         self._dense: Callable[[float], np.ndarray] | None = None
+
+    def args_at(self, y: Sequence[float]) -> tuple[float, float]:
+        """(σ, δ) at the state y, the current point of the tracking."""
+        out = []
+        for p, z in enumerate(_pairs(y, self.qoff)):
+            zero = z[0] * z[0] + z[1] * z[1] == 0.0
+            out.append(self.held[p] if zero else math.atan2(z[1], z[0]) + self.offset[p])
+        return out[0], out[1]
 
     def step(self, y_old: Sequence[float], h: float, stages: np.ndarray | None,
              points: Sequence[tuple[float, Sequence[float]]], dense: Callable[[float], np.ndarray], *,
@@ -103,35 +138,33 @@ class HalfAngleTracker:
             self.speed = [float(speed[0]), float(speed[1])]
         else:
             for p, (i, j) in enumerate(((o, o + 3), (o + 1, o + 2))):
-                self.speed[p] = SPEED_MARGIN * float(np.max(np.hypot(stages[:, i], stages[:, j])))
+                self.speed[p] = SPEED_MARGIN * math.sqrt(float(np.max(stages[:, i] ** 2 + stages[:, j] ** 2)))
         self._h, self._dense = h, dense
         out = []
         xa, za = 0.0, _pairs(y_old, o)
         for xb, yb in points:
             zb = _pairs(yb, o)
             self._piece(xa, za, xb, zb, 0)
-            out.append((self.arg[0], self.arg[1]))
+            out.append(self.args_at(yb))
             xa, za = xb, zb
         self.departing = [False, False]
         return out
 
     def _piece(self, xa: float, za: tuple, xb: float, zb: tuple, depth: int) -> None:
         # touch: 0 ordinary, 1 leaving z = 0 exactly, 2 arriving at z = 0 exactly, 3 at z = 0 throughout
-        d, rho, ok, touch = [0.0, 0.0], [0.0, 0.0], [True, True], [0, 0]
+        rho, ok, touch = [0.0, 0.0], [True, True], [0, 0]
         for p in (0, 1):
-            ra, rb = math.hypot(*za[p]), math.hypot(*zb[p])
-            if ra == 0.0 and rb == 0.0:
-                touch[p] = 3  # the argument is held
-            elif ra == 0.0:
-                touch[p], ok[p] = 1, False
-                d[p] = _wrap(math.atan2(zb[p][1], zb[p][0]) - self.arg[p])
-            elif rb == 0.0:
-                touch[p], ok[p] = 2, False
+            # as the C twin: a |z| below 1e-154 squares to 0 and counts as z = 0
+            ra2 = za[p][0] * za[p][0] + za[p][1] * za[p][1]
+            rb2 = zb[p][0] * zb[p][0] + zb[p][1] * zb[p][1]
+            if ra2 == 0.0 or rb2 == 0.0:
+                touch[p] = 3 if ra2 == rb2 else (1 if ra2 == 0.0 else 2)
+                ok[p] = touch[p] == 3
             else:
                 length = self.speed[p] * self._h * (xb - xa)
-                d[p] = _wrap(math.atan2(zb[p][1], zb[p][0]) - math.atan2(za[p][1], za[p][0]))
-                rho[p] = 0.5 * (ra + rb - length)
-                ok[p] = rho[p] > 0.0 and length < (_TWO_PI - abs(d[p])) * rho[p]
+                rho[p] = 0.5 * (math.sqrt(ra2) + math.sqrt(rb2) - length)
+                # the path stays at |z| ≥ rho, so turns by ≤ length/rho < π: the chord's turn
+                ok[p] = rho[p] > 0.0 and length < math.pi * rho[p]
         if not (ok[0] and ok[1]) and depth < MAX_DEPTH:
             xm = 0.5 * (xa + xb)
             zm = _pairs(self._dense(xm), self.qoff)
@@ -139,12 +172,18 @@ class HalfAngleTracker:
             self._piece(xm, zm, xb, zb, depth + 1)
             return
         for p in (0, 1):
+            if touch[p] == 1:  # leaving z = 0: the turn from the held argument, wrapped
+                a = math.atan2(zb[p][1], zb[p][0])
+                self.offset[p] = self.held[p] + _wrap(a - self.held[p]) - a
+            elif touch[p] == 2:
+                self.held[p] = math.atan2(za[p][1], za[p][0]) + self.offset[p]
+            elif touch[p] == 0:
+                self.offset[p] += _crossing(za[p], zb[p])
             if touch[p] == 3 or (touch[p] == 1 and self.departing[p]):
                 pass  # held at z = 0, or leaving it at the start along ż(0): not a passage
             elif not self.departing[p]:
                 # not ok: unresolved after MAX_DEPTH halvings, or touching z = 0: as if through z = 0
                 self._approach(p, rho[p] if ok[p] else 0.0)
-            self.arg[p] += d[p]
 
     def _approach(self, p: int, rho: float) -> None:
         """Record a piece staying at |z| ≥ rho: ``closest``, and entries below each 10⁻ᵏ in ``near``."""
@@ -253,22 +292,21 @@ class SampleTracker(HalfAngleTracker):
         c1, c2 = 6.0 * (qb - qa) - 4.0 * da - 2.0 * db, 6.0 * (qa - qb) + 3.0 * da + 3.0 * db
         tau = self._SAMPLES[:, None, None]
         deriv = da + c1 * tau + c2 * tau**2  # (samples, steps, 4)
-        d, rho, good, held, speed = [], [], np.ones(len(qa), dtype=bool), [], []
+        jumps, rho, good, held, speed = [], [], np.ones(len(qa), dtype=bool), [], []
         for i, j in ((0, 3), (1, 2)):
             # between samples 1/8 apart a quadratic leaves their chord by at most |c2| / 256
             v = SPEED_MARGIN * (np.max(np.hypot(deriv[..., i], deriv[..., j]), axis=0)
                                 + np.hypot(c2[:, i], c2[:, j]) / 256.0) / h
             length = v * h
-            r = np.hypot(q[:, i], q[:, j])
-            a = np.arctan2(q[:, j], q[:, i])
-            ra, rb = r[:-1], r[1:]
-            dp = np.diff(a)
-            dp -= _TWO_PI * np.round(dp / _TWO_PI)
+            r2 = q[:, i] ** 2 + q[:, j] ** 2
+            ra, rb = np.sqrt(r2[:-1]), np.sqrt(r2[1:])
             rp = 0.5 * (ra + rb - length)
-            hp = (ra == 0.0) & (rb == 0.0)
-            dp[hp] = 0.0
-            good &= hp | ((ra != 0.0) & (rb != 0.0) & (rp > 0.0) & (length < (_TWO_PI - np.abs(dp)) * rp))
-            d.append(dp)
+            hp = (r2[:-1] == 0.0) & (r2[1:] == 0.0)
+            good &= hp | ((r2[:-1] != 0.0) & (r2[1:] != 0.0) & (rp > 0.0) & (length < np.pi * rp))
+            below = np.signbit(q[:, j])
+            cross = q[:-1, i] * q[1:, j] - q[:-1, j] * q[1:, i]
+            jumps.append(_TWO_PI * ((~below[:-1] & below[1:] & (cross > 0.0)).astype(float)
+                                    - (below[:-1] & ~below[1:] & (cross < 0.0))))
             rho.append(rp)
             held.append(hp)
             speed.append(v)
@@ -279,7 +317,7 @@ class SampleTracker(HalfAngleTracker):
             if bad > k:  # steps k .. bad - 1: every change certain
                 for p in (0, 1):
                     self._approaches(p, rho[p][k:bad][~held[p][k:bad]])
-                    self.arg[p] += float(np.sum(d[p][k:bad]))
+                    self.offset[p] += float(np.sum(jumps[p][k:bad]))
             if bad < len(good):
                 dense = self._hermite(states[bad], qa[bad], qb[bad], da[bad], db[bad])
                 self.step(states[bad], h, None, [(1.0, states[bad + 1])], dense, speed=(speed[0][bad], speed[1][bad]))

@@ -520,7 +520,7 @@ def _splitting_path(inertia: np.ndarray, w0: np.ndarray, q0: np.ndarray, args0: 
     L, q = (inertia * w0).tolist(), q0.tolist()
     tracker = SampleTracker(np.array([*L, *q]), inertia, args0)
 
-    Ls, qs, args, n_total = [L], [q], [list(tracker.arg)], 0
+    Ls, qs, args, n_total = [L], [q], [tracker.args_at([*L, *q])], 0
     for n, h in _interval_steps(t, step, refine):
         done = 0
         while done < n:
@@ -532,7 +532,7 @@ def _splitting_path(inertia: np.ndarray, w0: np.ndarray, q0: np.ndarray, args0: 
             done += m
         Ls.append(L)
         qs.append(q)
-        args.append(list(tracker.arg))
+        args.append(tracker.args_at([*L, *q]))
         n_total += n
     return (np.array(Ls) / inertia, np.array(qs), np.array(args), tracker.closest, tracker.near), n_total
 

@@ -583,7 +583,7 @@ def _splitting_path(p: dict, w0: np.ndarray, q0: np.ndarray, args0: tuple[float,
     y = np.array([*(inertia * w0), *q0])
     tracker = SampleTracker(y, inertia, args0)
     stage = None if compiled is not None else _stage()
-    outs, arg_out, n_total = [y], [list(tracker.arg)], 0
+    outs, arg_out, n_total = [y], [tracker.args_at(y)], 0
     for n, h in _interval_steps(t, step, refine):
         done = 0
         while done < n:
@@ -600,7 +600,7 @@ def _splitting_path(p: dict, w0: np.ndarray, q0: np.ndarray, args0: tuple[float,
             done += m
         n_total += n
         outs.append(y)
-        arg_out.append(list(tracker.arg))
+        arg_out.append(tracker.args_at(y))
     arr = np.array(outs)
     return (arr[:, :3] / inertia, arr[:, 3:], np.array(arg_out), tracker.closest, tracker.near), n_total
 
