@@ -185,7 +185,8 @@ static void track_start(Track *tr, const double *y0, const double *f0, const dou
         if (z[p][0] * z[p][0] + z[p][1] * z[p][1] != 0.0) {
             tr->offset[p] = args0[p] - atan2(z[p][1], z[p][0]);
         } else if (zd[p][0] != 0.0 || zd[p][1] != 0.0) {
-            tr->held[p] = atan2(zd[p][1], zd[p][0]);
+            /* leaving z = 0 along z'(0): its direction, the representative nearest the given one */
+            tr->held[p] = args0[p] + wrap_pi(atan2(zd[p][1], zd[p][0]) - args0[p]);
             tr->departing[p] = 1;
         }
     }

@@ -108,8 +108,8 @@ class HalfAngleTracker:
         for p, (z, zdot) in enumerate(zip(_pairs(y0, qoff), _pairs(f0, qoff))):
             if z[0] * z[0] + z[1] * z[1] != 0.0:
                 self.offset[p] = self.held[p] - math.atan2(z[1], z[0])
-            elif zdot != (0.0, 0.0):
-                self.held[p] = math.atan2(zdot[1], zdot[0])
+            elif zdot != (0.0, 0.0):  # leaving z = 0 along ż(0): its direction, nearest the given argument
+                self.held[p] += _wrap(math.atan2(zdot[1], zdot[0]) - self.held[p])
                 self.departing[p] = True
         self.speed = [0.0, 0.0]
         self._h = 0.0
