@@ -30,7 +30,7 @@ import numpy as np
 
 from ..errors import IntegrationError
 from ..core import cbuild
-from .half_angles import DECADES
+from .half_angles import DECADE_THRESHOLDS, DECADES
 
 __all__ = ["CompiledDOP853", "compiled_dop853", "dop853_c_source", "unavailable_error", "MIN_RTOL"]
 
@@ -104,19 +104,17 @@ typedef struct {
     int departing[2];      /* z(0) = 0 exactly: the first step leaves it along z'(0) */
     double speed[2];       /* bound of |dz/dt| on the current step */
     double near[2][NDEC];  /* entries of the path below |z| = 10^-k */
-    int inside[2][NDEC];
+    int depth[2];          /* the path is below 10^-k for k < depth (thresholds decrease) */
 } Track;
 
 /* a piece staying at |z| >= rho (0: unresolved, as if through z = 0) */
 static void track_approach(Track *tr, int p, double rho)
 {
-    double thr = 1.0;
-    tr->closest[p] = fmin(tr->closest[p], rho);
-    for (int k = 0; k < NDEC; k++, thr *= 0.1) {
-        int below = rho < thr;
-        if (below && !tr->inside[p][k]) tr->near[p][k] += 1.0;
-        tr->inside[p][k] = below;
-    }
+    int d = tr->depth[p];
+    if (rho < tr->closest[p]) tr->closest[p] = rho;
+    while (d < NDEC && rho < TRACK_DECADE[d]) { tr->near[p][d] += 1.0; d++; }   /* entering */
+    while (d > 0 && !(rho < TRACK_DECADE[d - 1])) d--;                        /* leaving */
+    tr->depth[p] = d;
 }
 
 typedef struct {           /* one accepted step, with its dense output made on demand */
@@ -181,7 +179,8 @@ static void track_start(Track *tr, const double *y0, const double *f0, const dou
         tr->departing[p] = 0;
         tr->offset[p] = 0.0;
         tr->held[p] = args0[p];
-        for (int k = 0; k < NDEC; k++) { tr->near[p][k] = 0.0; tr->inside[p][k] = 0; }
+        tr->depth[p] = 0;
+        for (int k = 0; k < NDEC; k++) tr->near[p][k] = 0.0;
         if (z[p][0] * z[p][0] + z[p][1] * z[p][1] != 0.0) {
             tr->offset[p] = args0[p] - atan2(z[p][1], z[p][0]);
         } else if (zd[p][0] != 0.0 || zd[p][1] != 0.0) {
@@ -400,7 +399,7 @@ def dop853_c_source(exprs: Any, state: Sequence[Any], params: Sequence[Any], *, 
         f"#define NDIM {n}",
         # SciPy's tableau, printed exactly (repr round-trips); prefixed so no derived name can clash
         _c_array("DOP_A", coef.A), _c_array("DOP_B", coef.B), _c_array("DOP_E3", coef.E3),
-        _c_array("DOP_E5", coef.E5), _c_array("DOP_D", coef.D),
+        _c_array("DOP_E5", coef.E5), _c_array("DOP_D", coef.D), _c_array("TRACK_DECADE", DECADE_THRESHOLDS),
         rhs_source.replace(f"void {fn}(", f"static void {fn}(", 1),
         f"static void rhs(const double *y, const double *par, double *dy) {{ {fn}({glue_args}); }}",
         _DRIVER,

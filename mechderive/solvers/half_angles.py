@@ -42,7 +42,8 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-__all__ = ["HalfAngleTracker", "SampleTracker", "MAX_DEPTH", "SPEED_MARGIN", "DECADES", "PASSAGE_MARGIN",
+__all__ = ["HalfAngleTracker", "SampleTracker", "MAX_DEPTH", "SPEED_MARGIN", "DECADES", "DECADE_THRESHOLDS",
+           "PASSAGE_MARGIN",
            "euler_angles_from_half_angles", "initial_half_angles", "rotation_angle_between", "passages_within",
            "output_error_estimates"]
 
@@ -54,7 +55,8 @@ SPEED_MARGIN = 1.5
 DECADES = 17
 
 _TWO_PI = 2.0 * math.pi
-_THRESHOLDS = 10.0 ** -np.arange(DECADES)
+#: The thresholds 10⁻ᵏ (printed exactly into the C twin).
+DECADE_THRESHOLDS = 10.0 ** -np.arange(DECADES)
 
 
 def _wrap(x: float) -> float:
@@ -103,7 +105,7 @@ class HalfAngleTracker:
         self.held = [float(args0[0]), float(args0[1])]
         self.closest = [math.inf, math.inf]
         self.near = np.zeros((2, DECADES), dtype=np.int64)
-        self._inside = np.zeros((2, DECADES), dtype=bool)
+        self._depth = [0, 0]  # the path is below 10⁻ᵏ for k < depth
         self.departing = [False, False]
         for p, (z, zdot) in enumerate(zip(_pairs(y0, qoff), _pairs(f0, qoff))):
             if z[0] * z[0] + z[1] * z[1] != 0.0:
@@ -188,9 +190,13 @@ class HalfAngleTracker:
     def _approach(self, p: int, rho: float) -> None:
         """Record a piece staying at |z| ≥ rho: ``closest``, and entries below each 10⁻ᵏ in ``near``."""
         self.closest[p] = min(self.closest[p], rho)
-        below = rho < _THRESHOLDS
-        self.near[p] += below & ~self._inside[p]
-        self._inside[p] = below
+        d = self._depth[p]
+        while d < DECADES and rho < DECADE_THRESHOLDS[d]:  # entering
+            self.near[p][d] += 1
+            d += 1
+        while d > 0 and not rho < DECADE_THRESHOLDS[d - 1]:  # leaving
+            d -= 1
+        self._depth[p] = d
 
 
 def initial_half_angles(phi: float, psi: float) -> tuple[float, float]:
@@ -339,7 +345,8 @@ class SampleTracker(HalfAngleTracker):
         if rho.size == 0:
             return
         self.closest[p] = min(self.closest[p], float(np.min(rho)))
-        below = rho[:, None] < _THRESHOLDS  # (pieces, decades)
-        before = np.vstack([self._inside[p][None, :], below[:-1]])
-        self.near[p] += np.sum(below & ~before, axis=0)
-        self._inside[p] = below[-1]
+        depth = np.sum(rho[:, None] < DECADE_THRESHOLDS, axis=1)  # thresholds decrease: a prefix
+        before = np.concatenate([[self._depth[p]], depth[:-1]])
+        k = np.arange(DECADES)
+        self.near[p] += np.sum((depth[:, None] > k) & (before[:, None] <= k), axis=0)
+        self._depth[p] = int(depth[-1])
