@@ -138,9 +138,10 @@ class HalfAngleTracker:
         o = self.qoff
         if speed is not None:
             self.speed = [float(speed[0]), float(speed[1])]
-        else:
-            for p, (i, j) in enumerate(((o, o + 3), (o + 1, o + 2))):
-                self.speed[p] = SPEED_MARGIN * math.sqrt(float(np.max(stages[:, i] ** 2 + stages[:, j] ** 2)))
+        else:  # plain floats: for 13 rows NumPy's per-call cost would dominate
+            rows = stages[:, o:o + 4].tolist()
+            self.speed = [SPEED_MARGIN * math.sqrt(max(r[0] * r[0] + r[3] * r[3] for r in rows)),
+                          SPEED_MARGIN * math.sqrt(max(r[1] * r[1] + r[2] * r[2] for r in rows))]
         self._h, self._dense = h, dense
         out = []
         xa, za = 0.0, _pairs(y_old, o)

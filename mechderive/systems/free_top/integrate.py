@@ -8,10 +8,12 @@ e_a = R_ab ẽ_b (rows = body axes in space components), with Ṙ = hat(ω) R (3
 Equations, all derived and compiled, not typed in:
 
 * ω̇ from :attr:`FreeTopModel.euler_rhs` (Euler's equations with torque, (3.33) extended:
-  I1 ω̇1 = (I2 - I3) ω2 ω3 + τ1 and cyclically, τ in body components);
+  I1 ω̇1 = (I2 - I3) ω2 ω3 + τ1 and cyclically, τ in body components), evaluated in that
+  grouping (:func:`gyroscopic_form`: exactly 0 for equal moments);
 * q̇ = ½ q ⊗ (0, ω), derived from Ṙ = hat(ω) R in :mod:`mechderive.solvers.quaternion`;
 
-compiled together into one scalar function with :func:`compile_scalar`.
+compiled together into one scalar function with :func:`compile_scalar`.  The Euler angles of
+R(t) are returned too, their turns counted along every step (:mod:`mechderive.solvers.half_angles`).
 
 Methods (``method=``):
 
@@ -67,7 +69,7 @@ from ...solvers.half_angles import (SampleTracker, euler_angles_from_half_angles
                                     output_error_estimates)
 
 __all__ = ["integrate_free_top", "integrate_free_top_ensemble", "FreeTopTrajectory", "FreeTopEnsemble",
-           "IntegrationError", "METHODS", "SPLITTING_ORDERS"]
+           "IntegrationError", "METHODS", "SPLITTING_ORDERS", "RICHARDSON_MARGIN", "gyroscopic_form"]
 
 METHODS = ("DOP853", "splitting")
 #: Composition weights used for each order of the splitting (see mechderive.solvers.composition).
@@ -189,7 +191,7 @@ def gyroscopic_form(rows: Any, omega: Sequence[Any]) -> list:
     out = []
     for row in rows:
         terms = sp.collect(sp.expand(row), products, evaluate=False)
-        out.append(sp.Add(*(sp.together(c) * (m if m != 1 else sp.S.One) for m, c in terms.items())))
+        out.append(sp.Add(*(sp.together(c) * m for m, c in terms.items())))
     return out
 
 

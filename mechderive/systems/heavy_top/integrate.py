@@ -6,10 +6,13 @@ sleeping top of 3.6.3: there the usual Lagrangian right-hand side returns NaN). 
 state is given in the scene-file convention (Euler angles and rates, (3.54), (3.58)) and
 converted exactly by (3.58) (:func:`initial_state`) and
 :func:`~mechderive.kinematics.conversions.euler_to_quaternion`, so θ = 0 exactly and θ > π/2
-(a hanging top) are ordinary states.  The Euler angles are recovered from R(t) afterwards.
+(a hanging top) are ordinary states.  The Euler angles are recovered from q afterwards, their
+turns counted along every step of the integrator (:mod:`mechderive.solvers.half_angles`), so
+they do not depend on how coarsely the output is sampled.
 
 Equations (derived in :mod:`.rigid_model`, compiled once): Euler's equations with the gravity
-torque τ = M g l (R23, -R13, 0) and q̇ = ½ q ⊗ (0, ω).
+torque τ = M g l (R23, -R13, 0), evaluated in gyroscopic form ((I1 - I3)/I1) ω2 ω3 + τ1/I1
+(:func:`~mechderive.systems.free_top.integrate.gyroscopic_form`), and q̇ = ½ q ⊗ (0, ω).
 
 Parameters, ``params = dict(I1=, I3=, M=, g=, l=)``: the principal moments I1 = I2 and I3 about
 the **pivot** (kg m²), the mass M (kg), gravity g (m/s²) and the pivot–centre-of-mass distance
