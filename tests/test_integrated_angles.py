@@ -58,9 +58,10 @@ def _check_covered(actual: float, estimate: float, what: str) -> None:
 @pytest.mark.parametrize("samples", [2, 3, 11])
 def test_heavy_top_angles_at_coarse_sampling_match_the_closed_form(samples, backend):
     if backend == "scipy" and samples != 3:
-        pytest.skip("SciPy's stepper takes ~1 s a run: one sampling is enough (the same algorithm)")
+        pytest.skip("SciPy's stepper: one sampling is enough (the same algorithm)")
     t = np.linspace(0.0, 10.0, samples)
-    run = integrate_heavy_top(TOP, LAUNCH, t, rtol=1e-10, backend=backend)
+    # SciPy's stepper at a looser tolerance: ~100 µs a step in Python
+    run = integrate_heavy_top(TOP, LAUNCH, t, rtol=1e-10 if backend == "c" else 1e-8, backend=backend)
     ref = _heavy_exact(TOP, LAUNCH, t)
     assert ref["psi"][-1] > 190  # 30 turns in 10 s: unwrapping 2 or 3 samples loses all of them
     _check_covered(float(np.max(np.abs(run.euler_angles - ref["angles"]))), run.euler_angle_error_estimate, "angles")
@@ -192,11 +193,12 @@ def test_free_top_estimate_covers_omega_R_and_the_angles(I, w0, backend):
     _check_covered(errors["omega"], run.omega_error_estimate, "ω")
     _check_covered(errors["R"], run.rotation_error_estimate, "R")
     assert run.error_estimate >= max(errors.values())
-    if run.unresolved_passages == 0:
-        # the closed form's angles, unwrapped along 200 001 samples (0.5 ms apart: every near-axis
-        # passage of these motions spans many), read at t
-        fine = continuous_euler_angles(euler_angles_from_matrix(ex.rotation(np.linspace(0.0, 100.0, 200_001))))
-        angles = float(np.max(np.abs(run.euler_angles - fine[::20_000])))
+    if min(run.pole_clearance) > 0.05:
+        # the closed form's angles unwrapped along 20 001 samples: e3 stays ≥ 0.1 rad from ±ẽ3, so φ and ψ
+        # turn by ≤ |ω| / sin(0.1) · 5 ms < 0.2 rad between samples (|ω| ≤ 2.5); read at t.  (The rods pass
+        # within 1e-4 of ẽ3, where only a tracker resolves the side: tests of that are the heavy top's.)
+        fine = continuous_euler_angles(euler_angles_from_matrix(ex.rotation(np.linspace(0.0, 100.0, 20_001))))
+        angles = float(np.max(np.abs(run.euler_angles - fine[::2_000])))
         _check_covered(angles, run.euler_angle_error_estimate, "angles")
 
 
