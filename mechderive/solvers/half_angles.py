@@ -43,7 +43,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 __all__ = ["HalfAngleTracker", "SampleTracker", "MAX_DEPTH", "SPEED_MARGIN", "DECADES", "DECADE_THRESHOLDS",
-           "PASSAGE_MARGIN",
+           "PASSAGE_MARGIN", "CHUNK", "follow_fixed_steps",
            "euler_angles_from_half_angles", "initial_half_angles", "rotation_angle_between", "passages_within",
            "output_error_estimates"]
 
@@ -57,6 +57,7 @@ DECADES = 17
 _TWO_PI = 2.0 * math.pi
 #: The thresholds 10⁻ᵏ (printed exactly into the C twin).
 DECADE_THRESHOLDS = 10.0 ** -np.arange(DECADES)
+_ASCENDING = DECADE_THRESHOLDS[::-1].copy()
 
 
 def _wrap(x: float) -> float:
@@ -267,68 +268,76 @@ def output_error_estimates(run: tuple[np.ndarray, np.ndarray, np.ndarray, np.nda
 class SampleTracker(HalfAngleTracker):
     """:class:`HalfAngleTracker` along the states of a fixed-step integrator, which has no dense output.
 
-    The state is (L1, L2, L3, q0, …, q3) with ω = L / I.  Between two step ends q(t) is taken as the
-    cubic Hermite interpolant of q and q̇ = ½ q ⊗ (0, ω) there (error O(h⁴ |q⁗|) — as small relative
-    to |z| as the rotation per step is small: z_B near the pole turns with the spin, its size
-    does not change the ratio); |ż| is bounded by the largest |H'| of that cubic on the step
-    (sampled at 9 points, × :data:`SPEED_MARGIN`).  Steps whose change is certain are summed at
-    once; the others are halved as in :class:`HalfAngleTracker`, on the interpolant.
+    The state is (L1, L2, L3, q0, …, q3) with ω = L / I.  Between two recorded states q(t) is taken
+    as the cubic Hermite interpolant H of q and q̇ = ½ q ⊗ (0, ω) there (error O(h⁴ |q⁗|) — as small
+    relative to |z| as the rotation per step is small: z_B near the pole turns with the spin, its
+    size does not change the ratio); |ż| is bounded on the step by the triangle inequality on the
+    coefficients of H' (× :data:`SPEED_MARGIN`).  Steps whose change is certain are summed at once;
+    the others are halved as in :class:`HalfAngleTracker`, on the interpolant.
     """
-
-    _SAMPLES = np.linspace(0.0, 1.0, 9)
 
     def __init__(self, y0: np.ndarray, inertia: np.ndarray, args0: Sequence[float]) -> None:
         y0 = np.asarray(y0, dtype=float)
         self.inertia = np.asarray(inertia, dtype=float)
-        super().__init__(y0, self._rates(y0[None, :])[0], 3, args0)
+        super().__init__(y0, np.concatenate([np.zeros(3), self._qdot(y0[None, :])[0]]), 3, args0)
 
-    def _rates(self, states: np.ndarray) -> np.ndarray:
-        """(0, 0, 0, q̇) of each state: only q̇ is interpolated."""
-        from .quaternion import quaternion_rate
+    def _qdot(self, states: np.ndarray) -> np.ndarray:
+        """q̇ = ½ q ⊗ (0, ω) (:func:`~mechderive.solvers.quaternion.quaternion_rate`, written out) per state."""
+        w1, w2, w3 = (states[:, a] / self.inertia[a] for a in range(3))
+        q0, q1, q2, q3 = (states[:, 3 + a] for a in range(4))
+        return 0.5 * np.stack([-(q1 * w1 + q2 * w2 + q3 * w3), q0 * w1 + q2 * w3 - q3 * w2,
+                               q0 * w2 + q3 * w1 - q1 * w3, q0 * w3 + q1 * w2 - q2 * w1], axis=1)
 
-        out = np.zeros_like(states)
-        out[:, 3:] = quaternion_rate(states[:, 3:], states[:, :3] / self.inertia)
-        return out
-
-    def feed(self, states: np.ndarray, h: float) -> None:
-        """Advance along ``states`` (M + 1, 7): consecutive states one step ``h`` apart, the first one where
-        the last chunk ended."""
-        q, qd = states[:, 3:], self._rates(states)[:, 3:] * h  # dq/dτ, τ = (t - t_a)/h
-        qa, qb, da, db = q[:-1], q[1:], qd[:-1], qd[1:]
+    def feed(self, states: np.ndarray, h: Any) -> np.ndarray:
+        """Advance along ``states`` (M + 1, 7), consecutive states ``h`` (a number or M numbers) apart, the
+        first one where the last chunk ended.  Returns (σ, δ) at every one of them, shape (M + 1, 2)."""
+        h = np.broadcast_to(np.asarray(h, dtype=float), (len(states) - 1,))
+        q = states[:, 3:]
+        qdot = self._qdot(states)
+        qa, qb = q[:-1], q[1:]
+        da, db = qdot[:-1] * h[:, None], qdot[1:] * h[:, None]  # dq/dτ, τ = (t - t_a)/h
         # H'(τ) = da + (6 (qb - qa) - 4 da - 2 db) τ + (6 (qa - qb) + 3 da + 3 db) τ²
         c1, c2 = 6.0 * (qb - qa) - 4.0 * da - 2.0 * db, 6.0 * (qa - qb) + 3.0 * da + 3.0 * db
-        tau = self._SAMPLES[:, None, None]
-        deriv = da + c1 * tau + c2 * tau**2  # (samples, steps, 4)
-        jumps, rho, good, held, speed = [], [], np.ones(len(qa), dtype=bool), [], []
+        jumps, rho, good, held, speed, r2s = [], [], np.ones(len(qa), dtype=bool), [], [], []
         for i, j in ((0, 3), (1, 2)):
-            # between samples 1/8 apart a quadratic leaves their chord by at most |c2| / 256
-            v = SPEED_MARGIN * (np.max(np.hypot(deriv[..., i], deriv[..., j]), axis=0)
-                                + np.hypot(c2[:, i], c2[:, j]) / 256.0) / h
-            length = v * h
+            # |H'(τ)| ≤ |da| + |c1| τ + |c2| τ² on [0, 1], per pair: small where that pair moves little
+            length = SPEED_MARGIN * (np.sqrt(da[:, i] ** 2 + da[:, j] ** 2) + np.sqrt(c1[:, i] ** 2 + c1[:, j] ** 2)
+                                     + np.sqrt(c2[:, i] ** 2 + c2[:, j] ** 2))
             r2 = q[:, i] ** 2 + q[:, j] ** 2
-            ra, rb = np.sqrt(r2[:-1]), np.sqrt(r2[1:])
-            rp = 0.5 * (ra + rb - length)
+            rp = 0.5 * (np.sqrt(r2[:-1]) + np.sqrt(r2[1:]) - length)
             hp = (r2[:-1] == 0.0) & (r2[1:] == 0.0)
             good &= hp | ((r2[:-1] != 0.0) & (r2[1:] != 0.0) & (rp > 0.0) & (length < np.pi * rp))
             below = np.signbit(q[:, j])
             cross = q[:-1, i] * q[1:, j] - q[:-1, j] * q[1:, i]
-            jumps.append(_TWO_PI * ((~below[:-1] & below[1:] & (cross > 0.0)).astype(float)
-                                    - (below[:-1] & ~below[1:] & (cross < 0.0))))
+            down = ~below[:-1] & below[1:] & (cross > 0.0)  # atan2 jumps by -2π: the offset gains 2π
+            up = below[:-1] & ~below[1:] & (cross < 0.0)
+            jumps.append(_TWO_PI * (down.view(np.int8) - up.view(np.int8)))
             rho.append(rp)
             held.append(hp)
-            speed.append(v)
+            speed.append(length / h)
+            r2s.append(r2)
         if self.departing[0] or self.departing[1]:
             good[0] = False  # the first step, leaving z = 0: by the rule of HalfAngleTracker
+        offset, held_arg = np.empty((len(q), 2)), np.empty((len(q), 2))
+        offset[0], held_arg[0] = self.offset, self.held
         k = 0
         for bad in [*np.flatnonzero(~good), len(good)]:
             if bad > k:  # steps k .. bad - 1: every change certain
                 for p in (0, 1):
                     self._approaches(p, rho[p][k:bad][~held[p][k:bad]])
-                    self.offset[p] += float(np.sum(jumps[p][k:bad]))
+                    offset[k + 1:bad + 1, p] = self.offset[p] + np.cumsum(jumps[p][k:bad])
+                    held_arg[k + 1:bad + 1, p] = self.held[p]
+                    self.offset[p] = float(offset[bad, p])
             if bad < len(good):
                 dense = self._hermite(states[bad], qa[bad], qb[bad], da[bad], db[bad])
-                self.step(states[bad], h, None, [(1.0, states[bad + 1])], dense, speed=(speed[0][bad], speed[1][bad]))
+                self.step(states[bad], h[bad], None, [(1.0, states[bad + 1])], dense,
+                          speed=(speed[0][bad], speed[1][bad]))
+                offset[bad + 1], held_arg[bad + 1] = self.offset, self.held
             k = bad + 1
+        out = np.empty((len(q), 2))
+        for p, (i, j) in enumerate(((0, 3), (1, 2))):
+            out[:, p] = np.where(r2s[p] == 0.0, held_arg[:, p], np.arctan2(q[:, j], q[:, i]) + offset[:, p])
+        return out
 
     @staticmethod
     def _hermite(y_a: np.ndarray, qa: np.ndarray, qb: np.ndarray, da: np.ndarray,
@@ -346,8 +355,65 @@ class SampleTracker(HalfAngleTracker):
         if rho.size == 0:
             return
         self.closest[p] = min(self.closest[p], float(np.min(rho)))
-        depth = np.sum(rho[:, None] < DECADE_THRESHOLDS, axis=1)  # thresholds decrease: a prefix
+        # depth: how many thresholds (decreasing) lie above rho; each rise enters decades before .. depth - 1
+        if rho.min() >= DECADE_THRESHOLDS[1]:  # the common case, far from both poles: below 1 at most
+            depth = (rho < 1.0).view(np.int8).astype(np.intp)
+        else:
+            depth = DECADES - np.searchsorted(_ASCENDING, rho, side="right")
         before = np.concatenate([[self._depth[p]], depth[:-1]])
-        k = np.arange(DECADES)
-        self.near[p] += np.sum((depth[:, None] > k) & (before[:, None] <= k), axis=0)
+        rise = depth > before
+        if np.any(rise):
+            marks = np.bincount(before[rise], minlength=DECADES + 1) - np.bincount(depth[rise], minlength=DECADES + 1)
+            self.near[p] += np.cumsum(marks)[:DECADES]
         self._depth[p] = int(depth[-1])
+
+
+#: A fixed-step integration is recorded and tracked this many steps at a time (memory: 56 bytes a step).
+CHUNK = 1 << 16
+
+
+def follow_fixed_steps(y0: np.ndarray, inertia: np.ndarray, args0: Sequence[float],
+                       intervals: Sequence[tuple[int, float]],
+                       advance: Callable[[np.ndarray, list[tuple[int, float]]], np.ndarray],
+                       ) -> tuple[np.ndarray, np.ndarray, SampleTracker]:
+    """Run a fixed-step integrator over output ``intervals`` ((steps, step size) each) and track (σ, δ).
+
+    ``advance(y, pieces)`` runs the pieces ((steps, step size) each) from the state y and returns the
+    state after every step, row 0 y (:meth:`.kick_drift_c.CompiledSplitting.propagate_recorded`).
+    Pieces are batched up to :data:`CHUNK` steps (an interval longer than that is cut, which only
+    moves the chaining of the steps at the cut).  Returns (states at the interval ends (len(intervals), 7),
+    (σ, δ) at the start and the interval ends (len(intervals) + 1, 2), the tracker).
+    """
+    tracker = SampleTracker(y0, inertia, args0)
+    pieces = []  # (steps, step size, whether it ends an output interval)
+    for n, h in intervals:
+        while n > CHUNK:
+            pieces.append((CHUNK, h, False))
+            n -= CHUNK
+        pieces.append((n, h, True))
+    y = np.asarray(y0, dtype=float)
+    ends, args = [], [tracker.args_at(y)]
+    batch: list[tuple[int, float, bool]] = []
+
+    def flush() -> None:
+        nonlocal y
+        states = advance(y, [(n, h) for n, h, _ in batch])
+        tracked = tracker.feed(states, np.repeat([h for _, h, _ in batch], [n for n, _, _ in batch]))
+        rows = np.cumsum([n for n, _, _ in batch])
+        for row, (_, _, last) in zip(rows, batch):
+            if last:
+                ends.append(states[row])
+                args.append(tracked[row])
+        y = states[-1]
+        batch.clear()
+
+    total = 0
+    for piece in pieces:
+        if batch and total + piece[0] > CHUNK:
+            flush()
+            total = 0
+        batch.append(piece)
+        total += piece[0]
+    if batch:
+        flush()
+    return np.array(ends), np.array(args), tracker

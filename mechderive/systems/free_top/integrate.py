@@ -65,7 +65,7 @@ from ...kinematics.conversions import matrix_to_quaternion, quaternion_to_matrix
 from ...solvers import lie_poisson
 from ...solvers.dop853 import check_backend, run_dop853
 from ...solvers.composition import suzuki_fractal, yoshida6
-from ...solvers.half_angles import (SampleTracker, euler_angles_from_half_angles, initial_half_angles,
+from ...solvers.half_angles import (euler_angles_from_half_angles, follow_fixed_steps, initial_half_angles,
                                     output_error_estimates)
 
 __all__ = ["integrate_free_top", "integrate_free_top_ensemble", "FreeTopTrajectory", "FreeTopEnsemble",
@@ -511,32 +511,23 @@ def _interval_steps(t: np.ndarray, step: float, refine: int = 1) -> list[tuple[i
     return out
 
 
-#: The splitting's steps are recorded for the angle tracker this many at a time (memory: ~100 bytes a step).
-_TRACK_CHUNK = 1 << 16
-
-
 def _splitting_path(inertia: np.ndarray, w0: np.ndarray, q0: np.ndarray, args0: tuple[float, float], t: np.ndarray,
                     step: float, weights: tuple[float, ...], refine: int = 1) -> tuple[tuple, int]:
-    """((ω, raw q, (σ, δ), closest, near) at ``t``, steps): the state between every two steps goes
-    through a :class:`~mechderive.solvers.half_angles.SampleTracker`."""
-    L, q = (inertia * w0).tolist(), q0.tolist()
-    tracker = SampleTracker(np.array([*L, *q]), inertia, args0)
+    """((ω, raw q, (σ, δ), closest, near) at ``t``, steps): the state between every two steps is followed
+    by :func:`~mechderive.solvers.half_angles.follow_fixed_steps`."""
+    y0 = np.array([*(inertia * w0), *q0])
 
-    Ls, qs, args, n_total = [L], [q], [tracker.args_at([*L, *q])], 0
-    for n, h in _interval_steps(t, step, refine):
-        done = 0
-        while done < n:
-            m = min(_TRACK_CHUNK, n - done)
-            record = [(*L, *q)]
-            L, q = lie_poisson.propagate(L, q, inertia, h, m, weights, record=record)
-            record.append((*L, *q))
-            tracker.feed(np.array(record), h)
-            done += m
-        Ls.append(L)
-        qs.append(q)
-        args.append(tracker.args_at([*L, *q]))
-        n_total += n
-    return (np.array(Ls) / inertia, np.array(qs), np.array(args), tracker.closest, tracker.near), n_total
+    def advance(y: np.ndarray, pieces: list[tuple[int, float]]) -> np.ndarray:
+        rows = [tuple(y)]
+        for n, h in pieces:
+            L, q = lie_poisson.propagate(list(rows[-1][:3]), list(rows[-1][3:]), inertia, h, n, weights, record=rows)
+            rows.append((*L, *q))
+        return np.array(rows)
+
+    intervals = _interval_steps(t, step, refine)
+    ends, args, tracker = follow_fixed_steps(y0, inertia, args0, intervals, advance)
+    arr = np.vstack([y0, ends])
+    return (arr[:, :3] / inertia, arr[:, 3:], args, tracker.closest, tracker.near), sum(n for n, _ in intervals)
 
 
 def _run_splitting(inertia: np.ndarray, w0: np.ndarray, q0: np.ndarray, t: np.ndarray, step: float, order: int,

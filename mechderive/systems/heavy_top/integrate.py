@@ -80,7 +80,7 @@ from ...errors import InvalidInputError, ShapeError
 from ...kinematics.conversions import euler_to_quaternion, quaternion_to_matrix
 from ...kinematics.rotations import continuous_euler_angles  # noqa: F401 (re-exported)
 from ...solvers import kick_drift
-from ...solvers.half_angles import (SampleTracker, euler_angles_from_half_angles, initial_half_angles,
+from ...solvers.half_angles import (euler_angles_from_half_angles, follow_fixed_steps, initial_half_angles,
                                     output_error_estimates)
 # shared with the free top's integrators: composition weights per order, the error class, the checks of
 # t_eval and the cutting of each output interval into equal steps
@@ -479,10 +479,6 @@ def integrate_heavy_top_ensemble(params: Mapping[str, Any], initial: Mapping[str
 
 # --- the two methods -------------------------------------------------------------------------
 
-#: Per-step states of the splitting are tracked this many steps at a time (memory: 56 bytes a step).
-_TRACK_CHUNK = 1 << 16
-
-
 def _finish(p: dict, t: np.ndarray, run: tuple, rates: tuple[float, float], *, method: str, order: int | None,
             n_evaluations: int, n_steps: int | None, wall: float, reference: tuple | None, kind: str,
             factor: float = 1.0, backend: str = "python") -> HeavyTopTrajectory:
@@ -579,33 +575,27 @@ def _compiled_splitting() -> Any:
 def _splitting_path(p: dict, w0: np.ndarray, q0: np.ndarray, args0: tuple[float, float], t: np.ndarray,
                     step: float, weights: tuple[float, ...], refine: int = 1,
                     compiled: Any = None) -> tuple[tuple, int]:
-    """((ω, raw q, (σ, δ), closest, near) at ``t``, composed steps): every step's state passes through a
-    :class:`~mechderive.solvers.half_angles.SampleTracker`, so the angles' turns are counted per step."""
+    """((ω, raw q, (σ, δ), closest, near) at ``t``, composed steps): the state after every step is
+    followed by :func:`~mechderive.solvers.half_angles.follow_fixed_steps`, so the angles' turns are
+    counted per step."""
     inertia = np.array([p["I1"], p["I1"], p["I3"]])
     par = _param_values(p)
-    y = np.array([*(inertia * w0), *q0])
-    tracker = SampleTracker(y, inertia, args0)
+    y0 = np.array([*(inertia * w0), *q0])
     stage = None if compiled is not None else _stage()
-    outs, arg_out, n_total = [y], [tracker.args_at(y)], 0
-    for n, h in _interval_steps(t, step, refine):
-        done = 0
-        while done < n:
-            m = min(_TRACK_CHUNK, n - done)
-            if compiled is not None:
-                arr = compiled.propagate_steps(y, par, h, m, weights)
-            else:
-                ys = [y.tolist()]
-                for _ in range(m):
-                    ys.append(kick_drift.propagate(stage, ys[-1], par, h, 1, weights))
-                arr = np.array(ys)
-            tracker.feed(arr, h)
-            y = arr[-1]
-            done += m
-        n_total += n
-        outs.append(y)
-        arg_out.append(tracker.args_at(y))
-    arr = np.array(outs)
-    return (arr[:, :3] / inertia, arr[:, 3:], np.array(arg_out), tracker.closest, tracker.near), n_total
+
+    def advance(y: np.ndarray, pieces: list[tuple[int, float]]) -> np.ndarray:
+        if compiled is not None:
+            return compiled.propagate_recorded(y, par, pieces, weights)
+        rows = [y.tolist()]
+        for n, h in pieces:
+            end = kick_drift.propagate(stage, rows[-1], par, h, n, weights, record=rows)
+            rows.append(end)
+        return np.array(rows)
+
+    intervals = _interval_steps(t, step, refine)
+    ends, args, tracker = follow_fixed_steps(y0, inertia, args0, intervals, advance)
+    arr = np.vstack([y0, ends])
+    return (arr[:, :3] / inertia, arr[:, 3:], args, tracker.closest, tracker.near), sum(n for n, _ in intervals)
 
 
 def _run_splitting(p: dict, w0: np.ndarray, q0: np.ndarray, args0: tuple[float, float], rates: tuple[float, float],
