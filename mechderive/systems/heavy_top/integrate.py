@@ -515,10 +515,10 @@ def _finish(p: dict, t: np.ndarray, run: tuple, rates: tuple[float, float], *, m
 def _sleeping_split(q: np.ndarray, args: np.ndarray, rates: tuple[float, float]) -> np.ndarray:
     """(σ, δ) with the split of the turning between φ and ψ of the initial rates where only their sum exists.
 
-    A top that sleeps exactly at θ = 0 (q1 = q2 = 0 throughout) turns by φ + ψ only: the tracker holds
-    δ = (φ - ψ)/2 and φ, ψ would share the turning equally.  The closed form (and the scene file) give
-    φ = φ0 + φ̇0 t, ψ = ψ0 + ψ̇0 t, so δ - δ0 = κ (σ - σ0), κ = (φ̇0 - ψ̇0)/(φ̇0 + ψ̇0); at θ = π
-    (q0 = q3 = 0 throughout) likewise σ - σ0 = κ' (δ - δ0), κ' = (φ̇0 + ψ̇0)/(φ̇0 - ψ̇0).
+    A top that sleeps exactly at θ = 0 (q1 = q2 = 0 throughout) turns by φ + ψ only: the tracker
+    holds δ = (φ - ψ)/2 and φ, ψ would share the turning equally.  The closed form (and the scene
+    file) give φ = φ0 + φ̇0 t, ψ = ψ0 + ψ̇0 t, so δ - δ0 = κ (σ - σ0), κ = (φ̇0 - ψ̇0)/(φ̇0 + ψ̇0);
+    at θ = π (q0 = q3 = 0 throughout) likewise σ - σ0 = κ' (δ - δ0), κ' = (φ̇0 + ψ̇0)/(φ̇0 - ψ̇0).
     """
     phi_dot, psi_dot = rates
     out = args.copy()
