@@ -12,7 +12,9 @@ the 7-dimensional heavy top.  This module generates one C file holding
   initial-step heuristic (``select_initial_step``), the same error norm (the 5th- and 3rd-order
   estimates combined), the same step-size controller (safety 0.9, factors 0.2–10, exponent
   -1/8, no growth right after a rejection) and the same 7th-order dense output for the output
-  times, so it takes the same steps as ``solve_ivp`` to rounding;
+  times, so it takes the same steps as ``solve_ivp`` to rounding; and, on request, the
+  continuous Euler half-angles of a quaternion in the state, followed along every accepted step
+  (:mod:`mechderive.solvers.half_angles`, whose Python twin runs on SciPy's stepper);
 
 compiles it with the system compiler (:mod:`mechderive.core.cbuild`, cached on disk) and calls it
 through :mod:`ctypes`.  The systems are autonomous (no explicit t), as both tops are.
@@ -28,6 +30,7 @@ import numpy as np
 
 from ..errors import IntegrationError
 from ..core import cbuild
+from .half_angles import DECADE_THRESHOLDS, DECADES
 
 __all__ = ["CompiledDOP853", "compiled_dop853", "dop853_c_source", "unavailable_error", "MIN_RTOL"]
 
@@ -87,19 +90,189 @@ static double initial_step(const double *y0, const double *f0, const double *par
     return h;
 }
 
+/* ---- continuous arguments of z_A = q0 + i q3 and z_B = q1 + i q2 (mechderive.solvers.half_angles) ---- */
+#define TRACK_DEPTH 48
+#define SPEED_MARGIN 1.5
+#define TWO_PI 6.283185307179586
+#define NDEC 17            /* approaches counted below 1e0, 1e-1, ..., 1e-16 */
+
+typedef struct {
+    int qoff;              /* index of q0 in y */
+    double offset[2];      /* continuous argument = atan2(z) + offset where z != 0 */
+    double held[2];        /* the continuous argument while z = 0 exactly */
+    double closest[2];     /* smallest lower bound of |z| met (0: a piece not resolved) */
+    int departing[2];      /* z(0) = 0 exactly: the first step leaves it along z'(0) */
+    double speed[2];       /* bound of |dz/dt| on the current step */
+    double near[2][NDEC];  /* entries of the path below |z| = 10^-k */
+    int depth[2];          /* the path is below 10^-k for k < depth (thresholds decrease) */
+} Track;
+
+/* a piece staying at |z| >= rho (0: unresolved, as if through z = 0) */
+static void track_approach(Track *tr, int p, double rho)
+{
+    int d = tr->depth[p];
+    if (rho < tr->closest[p]) tr->closest[p] = rho;
+    while (d < NDEC && rho < TRACK_DECADE[d]) { tr->near[p][d] += 1.0; d++; }   /* entering */
+    while (d > 0 && !(rho < TRACK_DECADE[d - 1])) d--;                        /* leaving */
+    tr->depth[p] = d;
+}
+
+typedef struct {           /* one accepted step, with its dense output made on demand */
+    double h;
+    const double *y, *y_new, *par;
+    double (*K)[NDIM];
+    double (*F)[NDIM];
+    double *ytmp;
+    long *nfev;
+    int dense;
+} Step;
+
+static void dense_prepare(Step *st)
+{
+    if (st->dense) return;
+    for (int s = NST + 1; s < NSTX; s++) { stage(s, st->h, st->y, st->K, st->par, st->ytmp); (*st->nfev)++; }
+    for (int i = 0; i < NDIM; i++) {
+        double dy = st->y_new[i] - st->y[i];
+        st->F[0][i] = dy;
+        st->F[1][i] = st->h * st->K[0][i] - dy;
+        st->F[2][i] = 2 * dy - st->h * (st->K[NST][i] + st->K[0][i]);
+        for (int r = 0; r < 4; r++) {
+            double acc = 0.0;
+            for (int j = 0; j < NSTX; j++) acc += DOP_D[r][j] * st->K[j][i];
+            st->F[3 + r][i] = st->h * acc;
+        }
+    }
+    st->dense = 1;
+}
+
+/* y at t + x h, 0 < x < 1, by the 7th-order dense output */
+static void dense_eval(Step *st, double x, double *out)
+{
+    dense_prepare(st);
+    for (int i = 0; i < NDIM; i++) {
+        double v = 0.0;
+        for (int r = 6; r >= 0; r--) { v += st->F[r][i]; v *= ((6 - r) % 2 == 0) ? x : 1.0 - x; }
+        out[i] = st->y[i] + v;
+    }
+}
+
+static void track_pairs(const Track *tr, const double *y, double z[2][2])
+{
+    z[0][0] = y[tr->qoff];     z[0][1] = y[tr->qoff + 3];
+    z[1][0] = y[tr->qoff + 1]; z[1][1] = y[tr->qoff + 2];
+}
+
+static double wrap_pi(double x) { return x - TWO_PI * nearbyint(x / TWO_PI); }
+
+static double track_arg(const Track *tr, int p, const double z[2])
+{
+    return (z[0] * z[0] + z[1] * z[1] == 0.0) ? tr->held[p] : atan2(z[1], z[0]) + tr->offset[p];
+}
+
+static void track_start(Track *tr, const double *y0, const double *f0, const double *args0)
+{
+    double z[2][2], zd[2][2];
+    track_pairs(tr, y0, z);
+    track_pairs(tr, f0, zd);
+    for (int p = 0; p < 2; p++) {
+        tr->closest[p] = INFINITY;
+        tr->departing[p] = 0;
+        tr->offset[p] = 0.0;
+        tr->held[p] = args0[p];
+        tr->depth[p] = 0;
+        for (int k = 0; k < NDEC; k++) tr->near[p][k] = 0.0;
+        if (z[p][0] * z[p][0] + z[p][1] * z[p][1] != 0.0) {
+            tr->offset[p] = args0[p] - atan2(z[p][1], z[p][0]);
+        } else if (zd[p][0] != 0.0 || zd[p][1] != 0.0) {
+            /* leaving z = 0 along z'(0): its direction, the representative nearest the given one */
+            tr->held[p] = args0[p] + wrap_pi(atan2(zd[p][1], zd[p][0]) - args0[p]);
+            tr->departing[p] = 1;
+        }
+    }
+}
+
+/* 2 pi k keeping atan2(z) + 2 pi k continuous along the chord za -> zb: it meets y = 0 at
+   x = (za x zb)/(yb - ya), negative iff the cross product and yb - ya have opposite signs */
+static double track_crossing(const double za[2], const double zb[2])
+{
+    int below_a = signbit(za[1]) != 0, below_b = signbit(zb[1]) != 0;
+    if (below_a == below_b) return 0.0;
+    double cross = za[0] * zb[1] - za[1] * zb[0];
+    if (!below_a && cross > 0.0) return TWO_PI;
+    if (below_a && cross < 0.0) return -TWO_PI;
+    return 0.0;
+}
+
+/* the piece [xa, xb] of the step: halve until the turn of each argument is certain */
+static void track_piece(Track *tr, Step *st, double xa, double za[2][2], double xb, double zb[2][2], int depth)
+{
+    double rho[2] = {0.0, 0.0};
+    int ok[2] = {1, 1}, touch[2] = {0, 0};   /* touch: 1 leaving z = 0, 2 arriving, 3 at 0 throughout */
+    for (int p = 0; p < 2; p++) {
+        /* |q| ~ 1: no overflow; a |z| below 1e-154 squares to 0 and counts as z = 0 */
+        double ra2 = za[p][0] * za[p][0] + za[p][1] * za[p][1];
+        double rb2 = zb[p][0] * zb[p][0] + zb[p][1] * zb[p][1];
+        if (ra2 == 0.0 || rb2 == 0.0) {
+            touch[p] = ra2 == rb2 ? 3 : (ra2 == 0.0 ? 1 : 2);
+            ok[p] = touch[p] == 3;
+        } else {
+            double length = tr->speed[p] * st->h * (xb - xa);
+            rho[p] = 0.5 * (sqrt(ra2) + sqrt(rb2) - length);
+            /* the path stays at |z| >= rho, so turns by <= length/rho < pi: the chord's turn */
+            ok[p] = rho[p] > 0.0 && length < 0.5 * TWO_PI * rho[p];
+        }
+    }
+    if (!(ok[0] && ok[1]) && depth < TRACK_DEPTH) {
+        double xm = 0.5 * (xa + xb), ym[NDIM], zm[2][2];
+        dense_eval(st, xm, ym);
+        track_pairs(tr, ym, zm);
+        track_piece(tr, st, xa, za, xm, zm, depth + 1);
+        track_piece(tr, st, xm, zm, xb, zb, depth + 1);
+        return;
+    }
+    for (int p = 0; p < 2; p++) {
+        if (touch[p] == 1) {           /* leaving z = 0: the turn from the held argument, wrapped */
+            double a = atan2(zb[p][1], zb[p][0]);
+            tr->offset[p] = tr->held[p] + wrap_pi(a - tr->held[p]) - a;
+        } else if (touch[p] == 2) {
+            tr->held[p] = atan2(za[p][1], za[p][0]) + tr->offset[p];
+        } else if (touch[p] == 0) {
+            tr->offset[p] += track_crossing(za[p], zb[p]);
+        }
+        if (touch[p] == 3 || (touch[p] == 1 && tr->departing[p])) {
+            /* held at z = 0, or leaving it at the start along z'(0): not a passage */
+        } else if (!tr->departing[p]) {
+            track_approach(tr, p, ok[p] ? rho[p] : 0.0);
+        }
+    }
+}
+
 /* Integrate y' = f(y) from t_out[0] (y0) and write y at every t_out[k] (increasing) into y_out.
    h_inout: the step to try first (0: choose one); on return the step to continue with.
-   stats: nfev, accepted steps, rejected steps.  Returns 0, or a status of _STATUS. */
+   stats: nfev, accepted steps, rejected steps.  Returns 0, or a status of _STATUS.
+   qoff >= 0: also follow the arguments of q0 + i q3 and q1 + i q2 (q0 at y[qoff]) along every
+   step, from arg_out[0], arg_out[1] (overwritten where z(0) = 0); their values at t_out go to
+   arg_out (n_out x 2), the smallest lower bound of |z| met to closest[0..1] and the counts of
+   entries below |z| = 10^-k to closest[2 + NDEC p + k]. */
 int dop853_solve(const double *par, const double *y0, int n_out, const double *t_out, double *y_out,
-                 double rtol, double atol, long max_steps, double *h_inout, long *stats)
+                 double rtol, double atol, long max_steps, double *h_inout, long *stats,
+                 int qoff, double *arg_out, double *closest)
 {
     double K[NSTX][NDIM], y[NDIM], y_new[NDIM], ytmp[NDIM], F[7][NDIM];
     long nfev = 0, nstep = 0, nrej = 0;
     double t = t_out[0], t_end = t_out[n_out - 1];
     int k = 1, status = 0;
+    Track tr;
     for (int i = 0; i < NDIM; i++) { y[i] = y0[i]; y_out[i] = y0[i]; }
     if (n_out < 2) { stats[0] = stats[1] = stats[2] = 0; return 0; }
     rhs(y, par, K[0]); nfev++;
+    if (qoff >= 0) {
+        double args0[2] = {arg_out[0], arg_out[1]}, z0[2][2];
+        tr.qoff = qoff;
+        track_start(&tr, y, K[0], args0);
+        track_pairs(&tr, y, z0);
+        arg_out[0] = track_arg(&tr, 0, z0[0]); arg_out[1] = track_arg(&tr, 1, z0[1]);
+    }
     double h_abs = *h_inout > 0 ? *h_inout : initial_step(y, K[0], par, t_end - t, rtol, atol, &nfev);
     while (k < n_out) {
         double min_step = 10 * fabs(nextafter(t, INFINITY) - t);
@@ -140,35 +313,42 @@ int dop853_solve(const double *par, const double *y0, int n_out, const double *t
             rejected = 1; nrej++;
         }
         nstep++;
-        int dense = 0;
+        Step st = {h, y, y_new, par, K, F, ytmp, &nfev, 0};
+        double xa = 0.0, za[2][2], zb[2][2];
+        if (qoff >= 0) {
+            for (int p = 0; p < 2; p++) {
+                int i = qoff + (p ? 1 : 0), j = qoff + (p ? 2 : 3);
+                double v2 = 0.0;
+                for (int s = 0; s <= NST; s++) v2 = fmax(v2, K[s][i] * K[s][i] + K[s][j] * K[s][j]);
+                tr.speed[p] = SPEED_MARGIN * sqrt(v2);
+            }
+            track_pairs(&tr, y, za);
+        }
         while (k < n_out && t_out[k] <= t_new) {
             double *out = y_out + (long)k * NDIM;
             if (t_out[k] == t_new) {
                 for (int i = 0; i < NDIM; i++) out[i] = y_new[i];
             } else {
-                if (!dense) {
-                    for (int s = NST + 1; s < NSTX; s++) { stage(s, h, y, K, par, ytmp); nfev++; }
-                    for (int i = 0; i < NDIM; i++) {
-                        double dy = y_new[i] - y[i];
-                        F[0][i] = dy;
-                        F[1][i] = h * K[0][i] - dy;
-                        F[2][i] = 2 * dy - h * (K[NST][i] + K[0][i]);
-                        for (int r = 0; r < 4; r++) {
-                            double acc = 0.0;
-                            for (int j = 0; j < NSTX; j++) acc += DOP_D[r][j] * K[j][i];
-                            F[3 + r][i] = h * acc;
-                        }
-                    }
-                    dense = 1;
-                }
                 double x = (t_out[k] - t) / h;
-                for (int i = 0; i < NDIM; i++) {
-                    double v = 0.0;
-                    for (int r = 6; r >= 0; r--) { v += F[r][i]; v *= ((6 - r) % 2 == 0) ? x : 1.0 - x; }
-                    out[i] = y[i] + v;
+                dense_eval(&st, x, out);
+                if (qoff >= 0) {
+                    track_pairs(&tr, out, zb);
+                    track_piece(&tr, &st, xa, za, x, zb, 0);
+                    xa = x;
+                    za[0][0] = zb[0][0]; za[0][1] = zb[0][1]; za[1][0] = zb[1][0]; za[1][1] = zb[1][1];
+                    arg_out[2L * k] = track_arg(&tr, 0, zb[0]); arg_out[2L * k + 1] = track_arg(&tr, 1, zb[1]);
                 }
             }
             k++;
+        }
+        if (qoff >= 0) {
+            track_pairs(&tr, y_new, zb);
+            track_piece(&tr, &st, xa, za, 1.0, zb, 0);
+            tr.departing[0] = tr.departing[1] = 0;
+            if (t_out[k - 1] == t_new) {
+                arg_out[2L * (k - 1)] = track_arg(&tr, 0, zb[0]);
+                arg_out[2L * (k - 1) + 1] = track_arg(&tr, 1, zb[1]);
+            }
         }
         t = t_new;
         for (int i = 0; i < NDIM; i++) {
@@ -181,6 +361,10 @@ int dop853_solve(const double *par, const double *y0, int n_out, const double *t
 done:
     *h_inout = h_abs;
     stats[0] = nfev; stats[1] = nstep; stats[2] = nrej;
+    if (qoff >= 0) {
+        closest[0] = tr.closest[0]; closest[1] = tr.closest[1];
+        for (int p = 0; p < 2; p++) for (int k = 0; k < NDEC; k++) closest[2 + NDEC * p + k] = tr.near[p][k];
+    }
     return status;
 }
 """
@@ -215,7 +399,7 @@ def dop853_c_source(exprs: Any, state: Sequence[Any], params: Sequence[Any], *, 
         f"#define NDIM {n}",
         # SciPy's tableau, printed exactly (repr round-trips); prefixed so no derived name can clash
         _c_array("DOP_A", coef.A), _c_array("DOP_B", coef.B), _c_array("DOP_E3", coef.E3),
-        _c_array("DOP_E5", coef.E5), _c_array("DOP_D", coef.D),
+        _c_array("DOP_E5", coef.E5), _c_array("DOP_D", coef.D), _c_array("TRACK_DECADE", DECADE_THRESHOLDS),
         rhs_source.replace(f"void {fn}(", f"static void {fn}(", 1),
         f"static void rhs(const double *y, const double *par, double *dy) {{ {fn}({glue_args}); }}",
         _DRIVER,
@@ -233,12 +417,16 @@ class CompiledDOP853:
     _solve: Any
 
     def solve(self, t_eval: np.ndarray, y0: np.ndarray, params: Sequence[float], rtol: float, atol: float, *,
-              max_steps: int = 10**9) -> tuple[np.ndarray, dict]:
-        """(y at every ``t_eval``, shape (N, n); dict(nfev, steps, rejected)).
+              max_steps: int = 10**9, track: tuple[int, Sequence[float]] | None = None) -> tuple[np.ndarray, dict]:
+        """(y at every ``t_eval``, shape (N, n); dict(nfev, steps, rejected[, args, closest])).
 
         ``t_eval`` increasing with ``t_eval[0]`` the initial time; ``rtol`` is raised to
-        :data:`MIN_RTOL` as in SciPy.  Raises :class:`~mechderive.errors.IntegrationError` when
-        the step size collapses, the solution stops being finite, or ``max_steps`` is reached.
+        :data:`MIN_RTOL` as in SciPy.  ``track = (qoff, (σ0, δ0))``: also follow the arguments of
+        q0 + i q3 and q1 + i q2 (q0 at index ``qoff``) along every step
+        (:mod:`mechderive.solvers.half_angles`): ``args`` (N, 2) at ``t_eval``, ``closest`` (2,) and
+        ``near`` (2, DECADES).
+        Raises :class:`~mechderive.errors.IntegrationError` when the step size collapses, the
+        solution stops being finite, or ``max_steps`` is reached.
         """
         t = np.ascontiguousarray(t_eval, dtype=float)
         y0 = np.ascontiguousarray(y0, dtype=float)
@@ -246,15 +434,26 @@ class CompiledDOP853:
         if y0.shape != (self.n,) or par.shape != (self.n_par,):
             raise IntegrationError(f"expected y0 of shape ({self.n},) and {self.n_par} parameters, got "
                                    f"{y0.shape} and {par.shape}")
+        if track is not None and not 0 <= track[0] <= self.n - 4:
+            raise IntegrationError(f"expected a quaternion at y[{track[0]}:{track[0] + 4}] to track, got a state of "
+                                   f"{self.n} values")
         out = np.empty((t.size, self.n))
+        args = np.zeros((t.size, 2))
+        closest = np.zeros(2 + 2 * DECADES)
+        if track is not None:
+            args[0] = track[1]
         stats = (ctypes.c_long * 3)()
         h = ctypes.c_double(0.0)
         status = self._solve(par, y0, int(t.size), t, out, float(max(rtol, MIN_RTOL)), float(atol),
-                             int(max_steps), ctypes.byref(h), stats)
+                             int(max_steps), ctypes.byref(h), stats, -1 if track is None else int(track[0]),
+                             args, closest)
         if status != 0:
             raise IntegrationError(f"expected DOP853 ({self.name}, compiled) to reach t = {t[-1]:g}, got: "
                                    f"{_STATUS.get(status, f'status {status}')}")
-        return out, dict(nfev=int(stats[0]), steps=int(stats[1]), rejected=int(stats[2]))
+        info = dict(nfev=int(stats[0]), steps=int(stats[1]), rejected=int(stats[2]))
+        if track is not None:
+            info.update(args=args, closest=closest[:2], near=closest[2:].reshape(2, DECADES).astype(np.int64))
+        return out, info
 
 
 def unavailable_error(name: str, fallback: str = "scipy", *, kind: str = "dop853") -> IntegrationError:
@@ -284,6 +483,6 @@ def compiled_dop853(name: str, build: Callable[[], tuple[Any, Sequence[Any], Seq
     fn = lib.dop853_solve
     vec = np.ctypeslib.ndpointer(dtype=float, flags="C_CONTIGUOUS")
     fn.argtypes = [vec, vec, ctypes.c_int, vec, vec, ctypes.c_double, ctypes.c_double, ctypes.c_long,
-                   ctypes.POINTER(ctypes.c_double), ctypes.POINTER(ctypes.c_long)]
+                   ctypes.POINTER(ctypes.c_double), ctypes.POINTER(ctypes.c_long), ctypes.c_int, vec, vec]
     fn.restype = ctypes.c_int
     return CompiledDOP853(name=name, n=int(dims[0]), n_par=int(dims[1]), _solve=fn)

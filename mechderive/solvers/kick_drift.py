@@ -80,10 +80,12 @@ def _chained(weights: Sequence[float], step: float) -> tuple[float, list[tuple[f
 
 
 def propagate(stage: StageMap, state: Sequence[float], params: Sequence[float], step: float, n_steps: int,
-              weights: Sequence[float]) -> list[float]:
+              weights: Sequence[float], record: list | None = None) -> list[float]:
     """Advance one state (a list of floats) by ``n_steps`` composed steps of size ``step``.
 
     Calls ``stage`` 1 + n_steps · s times (s = :func:`stages_per_step`).  Returns the new state.
+    ``record``: a list to which the state between every two steps is appended (n_steps - 1 entries,
+    each the step's end followed by the next step's leading kick, which the chaining merges into it).
     """
     y = [float(v) for v in state]
     if n_steps <= 0:
@@ -94,6 +96,8 @@ def propagate(stage: StageMap, state: Sequence[float], params: Sequence[float], 
     for _ in range(n_steps - 1):
         for d, k in loop:
             y = stage(*y, d, k, *p)
+        if record is not None:
+            record.append([float(v) for v in y])
     for d, k in last:
         y = stage(*y, d, k, *p)
     return [float(v) for v in y]

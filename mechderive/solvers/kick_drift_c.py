@@ -47,6 +47,31 @@ void kdk_run(const double *y0, const double *par, int n_intervals, const long *n
         for (int i = 0; i < NDIM; i++) out[(long)(iv + 1) * NDIM + i] = y[i];
     }
 }
+
+/* kdk_run, recording the state after every composed step in out (1 + sum n_steps rows): within an
+   interval, between two steps, the step's end after the next step's leading kick, which the chaining
+   merges into it; at the interval's end, its end.  The arithmetic is kdk_run's. */
+void kdk_record(const double *y0, const double *par, int n_intervals, const long *n_steps, const double *h,
+                double head, int n_stages, const double *drift, const double *kick, double *out)
+{
+    double y[NDIM], tmp[NDIM];
+    long row = 0;
+    for (int i = 0; i < NDIM; i++) { y[i] = y0[i]; out[i] = y0[i]; }
+    for (int iv = 0; iv < n_intervals; iv++) {
+        long n = n_steps[iv];
+        double step = h[iv];
+        if (n > 0) stage_apply(y, 0.0, head * step, par, tmp);
+        for (long s = 0; s < n; s++) {
+            for (int k = 0; k < n_stages; k++) {
+                double kk = kick[k] * step;
+                if (k == n_stages - 1 && s < n - 1) kk += head * step;
+                stage_apply(y, drift[k] * step, kk, par, tmp);
+            }
+            row++;
+            for (int i = 0; i < NDIM; i++) out[row * NDIM + i] = y[i];
+        }
+    }
+}
 """
 
 
@@ -78,6 +103,7 @@ class CompiledSplitting:
     n: int
     n_par: int
     _run: Any
+    _record: Any = None
 
     def propagate(self, y0: Sequence[float], params: Sequence[float], intervals: Sequence[tuple[int, float]],
                   weights: Sequence[float]) -> np.ndarray:
@@ -98,6 +124,23 @@ class CompiledSplitting:
         self._run(y0, par, len(intervals), counts, steps, float(head), len(stages), drift, kick, out)
         return out
 
+    def propagate_recorded(self, y0: Sequence[float], params: Sequence[float], intervals: Sequence[tuple[int, float]],
+                           weights: Sequence[float]) -> np.ndarray:
+        """:meth:`propagate` (the same arithmetic) with the state recorded after every composed step:
+        shape (1 + Σ n, n), row 0 ``y0``; within an interval the row between two steps is the end of
+        the first followed by the leading kick of the next (merged with it by the chaining), at the
+        interval's end its end."""
+        head, stages = kdk_schedule(weights)
+        y0 = np.ascontiguousarray(y0, dtype=float)
+        par = np.ascontiguousarray(params, dtype=float)
+        counts = np.ascontiguousarray([n for n, _ in intervals], dtype=np.int64)
+        steps = np.ascontiguousarray([h for _, h in intervals], dtype=float)
+        drift = np.ascontiguousarray([d for d, _ in stages], dtype=float)
+        kick = np.ascontiguousarray([k for _, k in stages], dtype=float)
+        out = np.empty((1 + int(counts.sum()), self.n))
+        self._record(y0, par, len(intervals), counts, steps, float(head), len(stages), drift, kick, out)
+        return out
+
 
 def compiled_splitting(name: str, build: Callable[[], tuple]) -> CompiledSplitting | None:
     """The compiled splitting ``name``, or None without a usable C compiler.
@@ -115,4 +158,7 @@ def compiled_splitting(name: str, build: Callable[[], tuple]) -> CompiledSplitti
     longs = np.ctypeslib.ndpointer(dtype=np.int64, flags="C_CONTIGUOUS")
     fn.argtypes = [vec, vec, ctypes.c_int, longs, vec, ctypes.c_double, ctypes.c_int, vec, vec, vec]
     fn.restype = None
-    return CompiledSplitting(name=name, n=int(dims[0]), n_par=int(dims[1]), _run=fn)
+    rec = lib.kdk_record
+    rec.argtypes = [vec, vec, ctypes.c_int, longs, vec, ctypes.c_double, ctypes.c_int, vec, vec, vec]
+    rec.restype = None
+    return CompiledSplitting(name=name, n=int(dims[0]), n_par=int(dims[1]), _run=fn, _record=rec)

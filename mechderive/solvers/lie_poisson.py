@@ -73,11 +73,13 @@ def subflows_per_step(weights: Sequence[float]) -> int:
 
 
 def propagate(L: list[float], q: list[float], inertia: Sequence[float], step: float, n_steps: int,
-              weights: Sequence[float]) -> tuple[list[float], list[float]]:
+              weights: Sequence[float], record: list | None = None) -> tuple[list[float], list[float]]:
     """Advance one body by ``n_steps`` composed steps of size ``step``; returns new (L, q) lists.
 
     ``L``: body angular momentum (3 floats); ``q``: quaternion of A = Rᵀ (4 floats,
-    scalar first; not renormalised — its norm changes only by rounding).
+    scalar first; not renormalised — its norm changes only by rounding).  ``record``: a list to
+    which (L1, L2, L3, q0, q1, q2, q3) is appended between consecutive steps (n_steps - 1 entries;
+    each is the step's end followed by the next step's first sub-flow, which the chaining merges).
     """
     if n_steps <= 0:
         return list(L), list(q)
@@ -117,8 +119,13 @@ def propagate(L: list[float], q: list[float], inertia: Sequence[float], step: fl
                 q0, q3, q1, q2 = c * q0 - s * q3, c * q3 + s * q0, c * q1 + s * q2, c * q2 - s * q1
 
     run([head_k])
-    for _ in range(n_steps - 1):
-        run(loop)
+    if record is None:
+        for _ in range(n_steps - 1):
+            run(loop)
+    else:
+        for _ in range(n_steps - 1):
+            run(loop)
+            record.append((L1, L2, L3, q0, q1, q2, q3))
     run(last)
     return [L1, L2, L3], [q0, q1, q2, q3]
 

@@ -8,10 +8,12 @@ e_a = R_ab ẽ_b (rows = body axes in space components), with Ṙ = hat(ω) R (3
 Equations, all derived and compiled, not typed in:
 
 * ω̇ from :attr:`FreeTopModel.euler_rhs` (Euler's equations with torque, (3.33) extended:
-  I1 ω̇1 = (I2 - I3) ω2 ω3 + τ1 and cyclically, τ in body components);
+  I1 ω̇1 = (I2 - I3) ω2 ω3 + τ1 and cyclically, τ in body components), evaluated in that
+  grouping (:func:`gyroscopic_form`: exactly 0 for equal moments);
 * q̇ = ½ q ⊗ (0, ω), derived from Ṙ = hat(ω) R in :mod:`mechderive.solvers.quaternion`;
 
-compiled together into one scalar function with :func:`compile_scalar`.
+compiled together into one scalar function with :func:`compile_scalar`.  The Euler angles of
+R(t) are returned too, their turns counted along every step (:mod:`mechderive.solvers.half_angles`).
 
 Methods (``method=``):
 
@@ -63,13 +65,18 @@ from ...kinematics.conversions import matrix_to_quaternion, quaternion_to_matrix
 from ...solvers import lie_poisson
 from ...solvers.dop853 import check_backend, run_dop853
 from ...solvers.composition import suzuki_fractal, yoshida6
+from ...solvers.half_angles import (euler_angles_from_half_angles, follow_fixed_steps, initial_half_angles,
+                                    output_error_estimates)
 
 __all__ = ["integrate_free_top", "integrate_free_top_ensemble", "FreeTopTrajectory", "FreeTopEnsemble",
-           "IntegrationError", "METHODS", "SPLITTING_ORDERS"]
+           "IntegrationError", "METHODS", "SPLITTING_ORDERS", "RICHARDSON_MARGIN", "gyroscopic_form"]
 
 METHODS = ("DOP853", "splitting")
 #: Composition weights used for each order of the splitting (see mechderive.solvers.composition).
 SPLITTING_ORDERS: dict[int, tuple[float, ...]] = {2: (1.0,), 4: suzuki_fractal(4), 6: yoshida6()}
+#: Richardson's |y_h - y_(h/2)| · 2^p/(2^p - 1) is the error up to relative corrections O(h) (a few %
+#: at the steps used); this margin makes the reported estimate cover them.
+RICHARDSON_MARGIN = 1.25
 
 Torque = Callable[[float, np.ndarray, np.ndarray], Any]
 
@@ -85,22 +92,37 @@ class FreeTopTrajectory:
     t : (N,) times (s); ``t[0]`` is the initial time.
     omega : (N, 3) body components of ω (rad/s).
     quaternion : (N, 4) unit quaternion of A = Rᵀ, scalar first (projected onto |q| = 1).
+    euler_angles : (N, 3) Euler angles (φ, θ, ψ) (3.54) with R(φ, θ, ψ) = R, φ and ψ continuous, their
+        turns counted along every step of the integrator, not unwrapped from the samples
+        (:mod:`~mechderive.solvers.half_angles`; as for the heavy top,
+        :class:`~mechderive.systems.heavy_top.integrate.HeavyTopTrajectory`); at t0 those of R0 from
+        :func:`~mechderive.kinematics.rotations.euler_angles_from_matrix`, except that a run starting
+        exactly at θ = 0 (π) with e3 moving takes φ - ψ (φ + ψ) from the direction in which it leaves.
     R : (N, 3, 3) the chapter's R, e_a = R_ab ẽ_b (computed from ``quaternion`` on access).
     energy_drift : max_t |T(t) - T(t0)| / T(t0), T = ½ I_a ω_a² (3.46); physical, not an error, under torque.
     angular_momentum_drift : max_t | |L|(t) - |L|(t0) | / |L|(t0), |L|² from (3.47).
     quaternion_norm_drift : max_t | |q| - 1 | before projection.
     n_evaluations : right-hand-side evaluations (DOP853) or exact axis sub-flows (splitting).
-    n_steps : accepted steps (compiled DOP853; SciPy's does not report them: ``None``) or fixed
-        steps (splitting).
-    error_estimate : estimated max_t |ω - ω_exact| (rad/s), or ``None`` if not requested.
-    error_estimate_kind : how it was obtained (see :func:`integrate_free_top`).
+    n_steps : accepted steps (DOP853) or fixed steps (splitting).
+    error_estimate : one estimate that covers everything output — the largest of the three below
+        (ω in rad/s; R, q and the angles in rad) — or ``None`` if not requested.
+    omega_error_estimate : estimated max_t |ω - ω_exact| (rad/s), or ``None``.
+    rotation_error_estimate : estimated max_t of the rotation angle between R and R_exact (rad), widened
+        to bound every |R_ij - R_exact,ij| and |q - q_exact| too, or ``None``.
+    euler_angle_error_estimate : estimated max_t |Δφ|, |Δθ|, |Δψ| (rad), or ``None``; at least 2π n when
+        e3 passed n times closer to ẽ3 (or -ẽ3) than the error of R can resolve
+        (``unresolved_passages``: φ and ψ are then known only modulo 2π).
+    error_estimate_kind : how they were obtained (see :func:`integrate_free_top`).
     wall_time : seconds spent in the main run (excluding the error-estimate run).
-    backend : ``"c"`` (compiled DOP853), ``"scipy"`` (solve_ivp) or ``"python"`` (the splitting).
+    backend : ``"c"`` (compiled DOP853), ``"scipy"`` (SciPy's DOP853) or ``"python"`` (the splitting).
+    unresolved_passages : see ``euler_angle_error_estimate`` (0 without an estimate).
+    pole_clearance : lower bounds of min_t sin(θ/2) and min_t cos(θ/2) along the integrated path.
     """
 
     t: np.ndarray
     omega: np.ndarray
     quaternion: np.ndarray
+    euler_angles: np.ndarray
     method: str
     order: int | None
     energy_drift: float
@@ -112,6 +134,11 @@ class FreeTopTrajectory:
     error_estimate_kind: str
     wall_time: float
     backend: str = "scipy"
+    omega_error_estimate: float | None = None
+    rotation_error_estimate: float | None = None
+    euler_angle_error_estimate: float | None = None
+    unresolved_passages: int = 0
+    pole_clearance: tuple[float, float] = (math.inf, math.inf)
 
     @functools.cached_property
     def R(self) -> np.ndarray:
@@ -146,36 +173,55 @@ class FreeTopEnsemble:
 
 # --- compiled equations ----------------------------------------------------------------------
 
-@functools.cache
-def _state_rhs() -> Callable[..., list]:
-    """(ω̇, q̇) as one compiled scalar function of (ω1..3, q0..3, I1..3, τ1..3)."""
+def gyroscopic_form(rows: Any, omega: Sequence[Any]) -> list:
+    """Euler's equations (3.33) regrouped for evaluation: ((I_b - I_c)/I_a) ω_b ω_c + rest, per row.
+
+    The model states them expanded, I_b ω_b ω_c / I_a - I_c ω_b ω_c / I_a; evaluated so, the two
+    products round differently and leave ~ε·I_b ω_b ω_c / I_a where the exact value is 0 (I_b = I_c:
+    a symmetric body's ω̇_a = 0 drifts by 1e-10 over 100 s at I = (1, 1e3, 1e3)) — an error no rerun
+    at a tighter tolerance can see, since it is in the equation.  Forming the difference of the
+    moments first is exact when they are equal and keeps full relative accuracy when they are close.
+    Each row is the same expression (checked by the tests), only grouped.
+    """
+    import itertools
+
     import sympy as sp
 
-    from ...core.compile import compile_scalar
+    products = [a * b for a, b in itertools.combinations_with_replacement(omega, 2)]
+    out = []
+    for row in rows:
+        terms = sp.collect(sp.expand(row), products, evaluate=False)
+        out.append(sp.Add(*(sp.together(c) * m for m, c in terms.items())))
+    return out
+
+
+def _state_exprs() -> tuple[Any, list, list]:
+    """((ω̇, q̇), state symbols (ω, q), parameter symbols (I1..3, τ1..3)) of the free body."""
+    import sympy as sp
+
     from ...solvers.quaternion import quaternion_rate_expressions
     from .model import I1, I2, I3, model, omega_symbols, tau_symbols
 
     w = omega_symbols()
     q = sp.symbols("q0:4", real=True)
-    exprs = sp.Matrix([*model().euler_rhs, *quaternion_rate_expressions(q, w)])
-    return compile_scalar(exprs, [*w, *q, I1, I2, I3, *tau_symbols], name="free_top_state_rhs")
+    exprs = sp.Matrix([*gyroscopic_form(model().euler_rhs, w), *quaternion_rate_expressions(q, w)])
+    return exprs, [*w, *q], [I1, I2, I3, *tau_symbols]
+
+
+@functools.cache
+def _state_rhs() -> Callable[..., list]:
+    """(ω̇, q̇) as one compiled scalar function of (ω1..3, q0..3, I1..3, τ1..3)."""
+    from ...core.compile import compile_scalar
+
+    exprs, state, par = _state_exprs()
+    return compile_scalar(exprs, [*state, *par], name="free_top_state_rhs")
 
 
 def _compiled_dop853() -> Any:
     """The DOP853 stepper compiled to C with (ω̇, q̇) of the free body (τ as parameters), or None."""
     from ...solvers.dop853_c import compiled_dop853
 
-    def build():
-        import sympy as sp
-
-        from ...solvers.quaternion import quaternion_rate_expressions
-        from .model import I1, I2, I3, model, omega_symbols, tau_symbols
-
-        w = omega_symbols()
-        q = sp.symbols("q0:4", real=True)
-        exprs = sp.Matrix([*model().euler_rhs, *quaternion_rate_expressions(q, w)])
-        return exprs, [*w, *q], [I1, I2, I3, *tau_symbols]
-    return compiled_dop853("free_top", build)
+    return compiled_dop853("free_top", _state_exprs)
 
 
 @functools.cache
@@ -251,6 +297,17 @@ def _initial_quaternion(R0: Any, name: str = "R0") -> np.ndarray:
     return matrix_to_quaternion(check_rotation_matrix(arr, name))
 
 
+def _initial_half_angles(q0: np.ndarray) -> tuple[np.ndarray, tuple[float, float]]:
+    """(q0 with the sign of euler_to_quaternion(φ0, θ0, ψ0), (σ0, δ0)) for the Euler angles of R(q0)."""
+    from ...kinematics.conversions import euler_to_quaternion
+    from ...kinematics.rotations import euler_angles_from_matrix
+
+    phi, theta, psi = (float(v) for v in euler_angles_from_matrix(quaternion_to_matrix(q0)))
+    if float(np.dot(euler_to_quaternion(phi, theta, psi), q0)) < 0.0:
+        q0 = -q0  # the same rotation; the tracked arguments are those of euler_to_quaternion's sign
+    return q0, initial_half_angles(phi, psi)
+
+
 def _project(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(q/|q|, max over time of ||q| - 1|) for q of shape (N, ..., 4)."""
     norm = np.linalg.norm(q, axis=-1, keepdims=True)
@@ -280,13 +337,15 @@ def integrate_free_top(I: Sequence[float], omega0: Sequence[float], t_eval: Sequ
         since it calls back into Python).
     backend : DOP853 only: ``"auto"``, ``"c"`` (raises :class:`IntegrationError` without a C
         compiler, or with a torque) or ``"scipy"``.
-    estimate_error : estimate max_t |ω - ω_exact| (rad/s) by one extra run, reported in
-        ``error_estimate`` with its recipe in ``error_estimate_kind``:
-        DOP853 — max |ω - ω_ref| with ω_ref rerun at rtol/1000, atol/1000 (rtol floored at
-        2.3e-14, SciPy's limit: from rtol ≈ 1e-12 on the rerun is < 40× tighter and the figure
-        only a lower bound; SciPy does not expose its embedded estimate);
-        splitting — Richardson with the known order p: |ω_h - ω_{h/2}| · 2^p / (2^p - 1)
-        (the rerun costs twice the main run).
+    estimate_error : estimate the error of every output — ω (rad/s), R and q, the Euler angles
+        (rad) — by one extra run: ``omega_error_estimate``, ``rotation_error_estimate``,
+        ``euler_angle_error_estimate`` and their maximum ``error_estimate``, the recipe in
+        ``error_estimate_kind`` (:func:`~mechderive.solvers.half_angles.output_error_estimates`):
+        DOP853 — the distance to a rerun at rtol/1000, atol/1000, × 1/(1 - √r) for the ratio r of
+        the tolerances (:func:`~mechderive.solvers.dop853.reference_tolerance`: the rerun's rtol
+        is floored at 2.3e-14, SciPy's limit; below 2.3e-13 it runs looser, at 10·rtol, and the
+        figure is an upper bound ~10× the error); splitting — Richardson with the known order p,
+        |y_h - y_(h/2)| · 2^p / (2^p - 1) · 1.25 (the rerun costs twice the main run).
 
     Raises :class:`~mechderive.errors.UnphysicalInertiaError`, :class:`~mechderive.errors.ShapeError`,
     :class:`~mechderive.errors.InvalidInputError` on bad input, :class:`IntegrationError` if SciPy fails.
@@ -403,22 +462,47 @@ def _run_dop853(inertia: np.ndarray, w0: np.ndarray, q0: np.ndarray, t: np.ndarr
                 raise InvalidInputError(f"expected `torque(t, omega, R)` finite, got {tau.tolist()} at t = {t_:g}")
             return rhs(*y.tolist(), I1, I2, I3, *tau.tolist())
 
+    q0, args0 = _initial_half_angles(q0)
     y0 = np.concatenate([w0, q0])
 
-    sol, wall, ref, kind = run_dop853(fun, t, y0, rtol, atol, reference=estimate_error, compiled=compiled,
-                                      params=(I1, I2, I3, 0.0, 0.0, 0.0))
-    omega = sol.y[:3].T.copy()
-    quat, norm_drift = _project(sol.y[3:].T)
-    err = None
+    sol, wall, ref, kind, factor = run_dop853(fun, t, y0, rtol, atol, reference=estimate_error, compiled=compiled,
+                                              params=(I1, I2, I3, 0.0, 0.0, 0.0), track=(3, args0))
+    reference = None
     if ref is not None:
-        err = float(np.max(np.abs(ref.y[:3].T - omega)))
-        kind = f"max |ω - ω_ref|, ω_ref from {kind}"
+        reference = (ref.y[:3].T, ref.y[3:].T, ref.args, ref.near)
+        kind = f"distance to {kind}; ω, R and the Euler angles"
+    return _finish(inertia, t, (sol.y[:3].T.copy(), sol.y[3:].T, sol.args, sol.closest, sol.near), method="DOP853",
+                   order=None, n_evaluations=int(sol.nfev), n_steps=sol.steps, wall=wall, reference=reference,
+                   kind=kind, factor=factor, backend="scipy" if compiled is None else "c")
+
+
+def _finish(inertia: np.ndarray, t: np.ndarray, run: tuple, *, method: str, order: int | None, n_evaluations: int,
+            n_steps: int | None, wall: float, reference: tuple | None, kind: str, factor: float,
+            backend: str) -> FreeTopTrajectory:
+    """The trajectory from ``run`` = (ω, raw q, tracked (σ, δ), closest, near) and a reference run's
+    (ω, raw q, (σ, δ), near) or None, whose distance × ``factor`` gives the estimates."""
+    omega, q_raw, args, closest, near = run
+    quat, norm_drift = _project(q_raw)
+    angles = euler_angles_from_half_angles(quat, args)
+    est = dict(omega=None, rotation=None, euler=None, unresolved_passages=0)
+    err = None
+    if reference is not None:
+        w_ref, q_ref, args_ref, near_ref = reference
+        q_ref = q_ref / np.linalg.norm(q_ref, axis=-1, keepdims=True)
+        est = output_error_estimates((omega, quat, angles, near),
+                                     (w_ref, q_ref, euler_angles_from_half_angles(q_ref, args_ref), near_ref), factor)
+        err = max(est["omega"], est["rotation"], est["euler"])
+        if est["unresolved_passages"]:
+            kind += (f"; e3 passed {est['unresolved_passages']} time(s) closer to ±ẽ3 than the error of R: the "
+                     "turns of φ and ψ are then not determined (2π each time; φ ± ψ and R are)")
     e_drift, l_drift = _drifts(omega, inertia)
-    return FreeTopTrajectory(t=t, omega=omega, quaternion=quat, method="DOP853", order=None,
+    return FreeTopTrajectory(t=t, omega=omega, quaternion=quat, euler_angles=angles, method=method, order=order,
                              energy_drift=float(e_drift), angular_momentum_drift=float(l_drift),
-                             quaternion_norm_drift=float(norm_drift), n_evaluations=int(sol.nfev), n_steps=sol.steps,
-                             error_estimate=err, error_estimate_kind=kind, wall_time=wall,
-                             backend="scipy" if compiled is None else "c")
+                             quaternion_norm_drift=float(norm_drift), n_evaluations=n_evaluations, n_steps=n_steps,
+                             error_estimate=err, error_estimate_kind=kind, wall_time=wall, backend=backend,
+                             omega_error_estimate=est["omega"], rotation_error_estimate=est["rotation"],
+                             euler_angle_error_estimate=est["euler"], unresolved_passages=est["unresolved_passages"],
+                             pole_clearance=(float(closest[1]), float(closest[0])))
 
 
 def _interval_steps(t: np.ndarray, step: float, refine: int = 1) -> list[tuple[int, float]]:
@@ -430,33 +514,39 @@ def _interval_steps(t: np.ndarray, step: float, refine: int = 1) -> list[tuple[i
     return out
 
 
-def _splitting_path(inertia: np.ndarray, w0: np.ndarray, q0: np.ndarray, t: np.ndarray, step: float,
-                    weights: tuple[float, ...], refine: int = 1) -> tuple[np.ndarray, np.ndarray, int]:
-    L, q = (inertia * w0).tolist(), q0.tolist()
-    Ls, qs, n_total = [L], [q], 0
-    for n, h in _interval_steps(t, step, refine):
-        L, q = lie_poisson.propagate(L, q, inertia, h, n, weights)
-        Ls.append(L)
-        qs.append(q)
-        n_total += n
-    return np.array(Ls) / inertia, np.array(qs), n_total
+def _splitting_path(inertia: np.ndarray, w0: np.ndarray, q0: np.ndarray, args0: tuple[float, float], t: np.ndarray,
+                    step: float, weights: tuple[float, ...], refine: int = 1) -> tuple[tuple, int]:
+    """((ω, raw q, (σ, δ), closest, near) at ``t``, steps): the state between every two steps is followed
+    by :func:`~mechderive.solvers.half_angles.follow_fixed_steps`."""
+    y0 = np.array([*(inertia * w0), *q0])
+
+    def advance(y: np.ndarray, pieces: list[tuple[int, float]]) -> np.ndarray:
+        rows = [tuple(y)]
+        for n, h in pieces:
+            L, q = lie_poisson.propagate(list(rows[-1][:3]), list(rows[-1][3:]), inertia, h, n, weights, record=rows)
+            rows.append((*L, *q))
+        return np.array(rows)
+
+    intervals = _interval_steps(t, step, refine)
+    ends, args, tracker = follow_fixed_steps(y0, inertia, args0, intervals, advance)
+    arr = np.vstack([y0, ends])
+    return (arr[:, :3] / inertia, arr[:, 3:], args, tracker.closest, tracker.near), sum(n for n, _ in intervals)
 
 
 def _run_splitting(inertia: np.ndarray, w0: np.ndarray, q0: np.ndarray, t: np.ndarray, step: float, order: int,
                    estimate_error: bool) -> FreeTopTrajectory:
     weights = SPLITTING_ORDERS[order]
+    q0, args0 = _initial_half_angles(q0)
     start = time.perf_counter()
-    omega, q_raw, n_steps = _splitting_path(inertia, w0, q0, t, step, weights)
+    run, n_steps = _splitting_path(inertia, w0, q0, args0, t, step, weights)
     wall = time.perf_counter() - start
-    quat, norm_drift = _project(q_raw)
-    err, kind = None, "not requested"
+    reference, kind, factor = None, "not requested", 1.0
     if estimate_error:
-        fine, _, _ = _splitting_path(inertia, w0, q0, t, step, weights, refine=2)
-        err = float(np.max(np.abs(omega - fine)) * 2**order / (2**order - 1))
-        kind = f"Richardson: max |ω_h - ω_(h/2)| · 2^{order}/(2^{order} - 1)"
-    e_drift, l_drift = _drifts(omega, inertia)
+        fine, _ = _splitting_path(inertia, w0, q0, args0, t, step, weights, refine=2)
+        reference, factor = (fine[0], fine[1], fine[2], fine[4]), RICHARDSON_MARGIN * 2**order / (2**order - 1)
+        kind = (f"Richardson: max |y_h - y_(h/2)| · 2^{order}/(2^{order} - 1) · {RICHARDSON_MARGIN}, y = ω, the "
+                "orientation and the "
+                "Euler angles")
     n_sub = n_steps * lie_poisson.subflows_per_step(weights) + (len(t) - 1)
-    return FreeTopTrajectory(t=t, omega=omega, quaternion=quat, method="splitting", order=order,
-                             energy_drift=float(e_drift), angular_momentum_drift=float(l_drift),
-                             quaternion_norm_drift=float(norm_drift), n_evaluations=n_sub, n_steps=n_steps,
-                             error_estimate=err, error_estimate_kind=kind, wall_time=wall, backend="python")
+    return _finish(inertia, t, run, method="splitting", order=order, n_evaluations=n_sub, n_steps=n_steps,
+                   wall=wall, reference=reference, kind=kind, factor=factor, backend="python")

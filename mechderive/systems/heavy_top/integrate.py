@@ -6,10 +6,13 @@ sleeping top of 3.6.3: there the usual Lagrangian right-hand side returns NaN). 
 state is given in the scene-file convention (Euler angles and rates, (3.54), (3.58)) and
 converted exactly by (3.58) (:func:`initial_state`) and
 :func:`~mechderive.kinematics.conversions.euler_to_quaternion`, so θ = 0 exactly and θ > π/2
-(a hanging top) are ordinary states.  The Euler angles are recovered from R(t) afterwards.
+(a hanging top) are ordinary states.  The Euler angles are recovered from q afterwards, their
+turns counted along every step of the integrator (:mod:`mechderive.solvers.half_angles`), so
+they do not depend on how coarsely the output is sampled.
 
 Equations (derived in :mod:`.rigid_model`, compiled once): Euler's equations with the gravity
-torque τ = M g l (R23, -R13, 0) and q̇ = ½ q ⊗ (0, ω).
+torque τ = M g l (R23, -R13, 0), evaluated in gyroscopic form ((I1 - I3)/I1) ω2 ω3 + τ1/I1
+(:func:`~mechderive.systems.free_top.integrate.gyroscopic_form`), and q̇ = ½ q ⊗ (0, ω).
 
 Parameters, ``params = dict(I1=, I3=, M=, g=, l=)``: the principal moments I1 = I2 and I3 about
 the **pivot** (kg m²), the mass M (kg), gravity g (m/s²) and the pivot–centre-of-mass distance
@@ -75,13 +78,15 @@ import numpy as np
 from ...core.validate import check_positive
 from ...errors import InvalidInputError, ShapeError
 from ...kinematics.conversions import euler_to_quaternion, quaternion_to_matrix
-from ...kinematics.rotations import continuous_euler_angles, euler_angles_from_matrix  # noqa: F401 (re-exported)
+from ...kinematics.rotations import continuous_euler_angles  # noqa: F401 (re-exported)
 from ...solvers import kick_drift
+from ...solvers.half_angles import (euler_angles_from_half_angles, follow_fixed_steps, initial_half_angles,
+                                    output_error_estimates)
 # shared with the free top's integrators: composition weights per order, the error class, the checks of
 # t_eval and the cutting of each output interval into equal steps
 from ...errors import IntegrationError  # noqa: F401 (re-exported)
 from ...solvers.dop853 import check_backend, run_dop853
-from ..free_top.integrate import SPLITTING_ORDERS, _check_times, _interval_steps
+from ..free_top.integrate import RICHARDSON_MARGIN, SPLITTING_ORDERS, _check_times, _interval_steps
 
 __all__ = ["integrate_heavy_top", "integrate_heavy_top_ensemble", "HeavyTopTrajectory", "HeavyTopEnsemble",
            "check_params", "check_initial", "initial_state", "continuous_euler_angles", "IntegrationError",
@@ -104,6 +109,13 @@ class HeavyTopTrajectory:
     t : (N,) times (s); ``t[0]`` is the initial time.
     omega : (N, 3) body components of ω (rad/s).
     quaternion : (N, 4) unit quaternion of A = Rᵀ, scalar first (projected onto |q| = 1).
+    euler_angles : (N, 3) Euler angles (φ, θ, ψ) (3.54) with R(φ, θ, ψ) = R: θ = 2 atan2(√(q1² + q2²),
+        √(q0² + q3²)) ∈ [0, π]; φ and ψ continuous, their turns counted along every step of the
+        integrator — refined with its dense output where needed — not unwrapped from the samples
+        (:mod:`~mechderive.solvers.half_angles`), so they are right at any sampling.  Near θ = 0 only
+        φ + ψ is well conditioned (near π, φ - ψ).  A run starting exactly at θ = 0 (π) with the apex
+        moving takes φ - ψ (φ + ψ) from the direction in which the apex leaves; a top sleeping exactly
+        there splits φ + ψ (φ - ψ) between φ and ψ as the initial rates do.
     params : the checked parameters (floats).
     method, order : ``"DOP853"`` (order ``None``) or ``"splitting"`` with its order.
     energy_drift : max_t |E(t) - E(t0)| / (T(t0) + M g l), E = T + V of (3.65) (V ranges over ±M g l).
@@ -112,18 +124,29 @@ class HeavyTopTrajectory:
     quaternion_norm_drift : max_t | |q| - 1 | before projection.
     n_evaluations : right-hand-side evaluations (DOP853) or compiled stage calls (splitting:
         each one exact free-top drift plus one kick).
-    n_steps : fixed steps (splitting), accepted steps (compiled DOP853) or ``None`` (SciPy's
-        DOP853 does not report them).
+    n_steps : accepted steps (DOP853) or fixed steps (splitting).
     omega_error_estimate : estimated max_t |ω - ω_exact| (rad/s), or ``None``.
-    angle_error_estimate : estimated max_t of the rotation angle between R and R_exact (rad), or ``None``.
+    rotation_error_estimate : estimated max_t of the rotation angle between R and R_exact (rad), widened
+        to bound every |R_ij - R_exact,ij| and |q - q_exact| too, or ``None``.
+    euler_angle_error_estimate : estimated max_t |Δφ|, |Δθ|, |Δψ| of ``euler_angles`` (rad), or
+        ``None``; at least 2π n when the apex passed n times closer to the pole (or the bottom) than
+        the error of R can resolve (``unresolved_passages``): φ and ψ are then known only modulo 2π
+        (φ ± ψ and R are not affected).
+    angle_error_estimate : the largest of the three above — one estimate that covers everything
+        output (ω in rad/s; R, q and the angles in rad), or ``None``.
     error_estimate_kind : how the estimates were obtained (see :func:`integrate_heavy_top`).
     wall_time : seconds spent in the main integration (excluding the error-estimate rerun).
-    backend : ``"c"`` (compiled DOP853), ``"scipy"`` (solve_ivp) or ``"python"`` (the splitting).
+    backend : ``"c"`` (compiled), ``"scipy"`` (SciPy's DOP853) or ``"python"`` (the splitting in Python).
+    unresolved_passages : see ``euler_angle_error_estimate`` (0 without an estimate).
+    pole_clearance : lower bounds of min_t sin(θ/2) and of min_t cos(θ/2) along the integrated path
+        (its distances, in the quaternion, from the pole and from the bottom); ``inf`` where it stays
+        exactly at θ = 0 (θ = π) throughout, 0 where a step could not resolve its passage.
     """
 
     t: np.ndarray
     omega: np.ndarray
     quaternion: np.ndarray
+    euler_angles: np.ndarray
     params: dict
     method: str
     order: int | None
@@ -134,23 +157,19 @@ class HeavyTopTrajectory:
     n_evaluations: int
     n_steps: int | None
     omega_error_estimate: float | None
+    rotation_error_estimate: float | None
+    euler_angle_error_estimate: float | None
     angle_error_estimate: float | None
     error_estimate_kind: str
     wall_time: float
     backend: str = "scipy"
+    unresolved_passages: int = 0
+    pole_clearance: tuple[float, float] = (math.inf, math.inf)
 
     @functools.cached_property
     def R(self) -> np.ndarray:
         """(N, 3, 3) rotation matrices of the chapter's convention, e_a = R_ab ẽ_b."""
         return quaternion_to_matrix(self.quaternion)
-
-    @functools.cached_property
-    def euler_angles(self) -> np.ndarray:
-        """(N, 3) Euler angles (φ, θ, ψ) of R(t) (3.54), φ and ψ unwrapped (:func:`continuous_euler_angles`).
-
-        θ ∈ [0, π] is accurate everywhere; near θ = 0 only φ + ψ is well conditioned.
-        """
-        return continuous_euler_angles(euler_angles_from_matrix(self.R))
 
     @functools.cached_property
     def invariants(self) -> np.ndarray:
@@ -204,14 +223,25 @@ def _symbols() -> tuple[list, list, list]:
     return [*omega_symbols(), *quaternion_symbols()], [*momentum_symbols(), *quaternion_symbols()], list(parameters())
 
 
+def _rhs_exprs() -> Any:
+    """(ω̇, q̇) of :attr:`.rigid_model.HeavyTopRigidModel.rhs`, Euler's equations in gyroscopic form."""
+    import sympy as sp
+
+    from ..free_top.integrate import gyroscopic_form
+    from ..free_top.model import omega_symbols
+    from .rigid_model import model
+
+    m = model()
+    return sp.Matrix([*gyroscopic_form(m.euler_rhs, omega_symbols()), *m.quaternion_rhs])
+
+
 @functools.cache
 def _rhs() -> Callable[..., list]:
     """(ω̇, q̇) as one compiled scalar function of (ω1..3, q0..3, I1, I3, M, g, l)."""
     from ...core.compile import compile_scalar
-    from .rigid_model import model
 
     state, _, par = _symbols()
-    return compile_scalar(model().rhs, [*state, *par], name="heavy_top_rhs")
+    return compile_scalar(_rhs_exprs(), [*state, *par], name="heavy_top_rhs")
 
 
 def _compiled_dop853() -> Any:
@@ -219,10 +249,8 @@ def _compiled_dop853() -> Any:
     from ...solvers.dop853_c import compiled_dop853
 
     def build():
-        from .rigid_model import model
-
         state, _, par = _symbols()
-        return model().rhs, state, par
+        return _rhs_exprs(), state, par
     return compiled_dop853("heavy_top", build)
 
 
@@ -329,14 +357,6 @@ def _project(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return q / norm, np.max(np.abs(norm[..., 0] - 1.0), axis=0)
 
 
-def _rotation_angle_between(q: np.ndarray, q_ref: np.ndarray) -> np.ndarray:
-    """The angle (rad) of the relative rotation between unit quaternions, accurate for small angles."""
-    dot = np.abs(np.sum(q * q_ref, axis=-1))
-    cross = np.linalg.norm(q_ref[..., :1] * q[..., 1:] - q[..., :1] * q_ref[..., 1:]
-                           - np.cross(q_ref[..., 1:], q[..., 1:]), axis=-1)
-    return 2.0 * np.arctan2(cross, dot)
-
-
 # --- the public entry points -----------------------------------------------------------------
 
 def integrate_heavy_top(params: Mapping[str, float], initial: Mapping[str, float], t_eval: Sequence[float], *,
@@ -359,12 +379,15 @@ def integrate_heavy_top(params: Mapping[str, float], initial: Mapping[str, float
     backend : ``"auto"`` (compiled C where a C compiler is found), ``"c"`` (raises
         :class:`IntegrationError` without a compiler), or the uncompiled path: ``"scipy"``
         (DOP853) / ``"python"`` (the splitting's stage loop in Python).
-    estimate_error : estimate the error by one extra run, reported in ``omega_error_estimate``
-        (rad/s), ``angle_error_estimate`` (rad) and ``error_estimate_kind``:
-        DOP853 — the distance to a rerun at rtol/1000, atol/1000 (rtol floored at 2.3e-14,
-        SciPy's limit, on both backends: from rtol ≈ 1e-11 on the rerun is < 1000× tighter and the figure a
-        lower bound); splitting — Richardson with the known order p,
-        |y_h - y_(h/2)| · 2^p / (2^p - 1) (the rerun costs twice the main run).
+    estimate_error : estimate the error of every output — ω (rad/s), R and q, the Euler angles
+        (rad) — by one extra run: ``omega_error_estimate``, ``rotation_error_estimate``,
+        ``euler_angle_error_estimate`` and their maximum ``angle_error_estimate``, the recipe in
+        ``error_estimate_kind`` (:func:`~mechderive.solvers.half_angles.output_error_estimates`):
+        DOP853 — the distance to a rerun at rtol/1000, atol/1000, × 1/(1 - √r) for the ratio r of
+        the tolerances (:func:`~mechderive.solvers.dop853.reference_tolerance`: the rerun's rtol
+        is floored at 2.3e-14, SciPy's limit; below 2.3e-13 it runs looser, at 10·rtol, and the
+        figure is an upper bound ~10× the error); splitting — Richardson with the known order p,
+        |y_h - y_(h/2)| · 2^p / (2^p - 1) · 1.25 (the rerun costs twice the main run).
 
     Raises :class:`~mechderive.errors.InvalidInputError` (or its subclasses
     :class:`~mechderive.errors.UnphysicalInertiaError`, :class:`~mechderive.errors.NonFiniteValueError`)
@@ -384,6 +407,8 @@ def integrate_heavy_top(params: Mapping[str, float], initial: Mapping[str, float
         raise ShapeError("expected scalar `initial` values (use integrate_heavy_top_ensemble for arrays), got arrays")
     t = _check_times(t_eval)
     w0, q0 = initial_state(init)
+    args0 = initial_half_angles(init["phi"], init["psi"])
+    rates = (float(init["phi_dot"]), float(init["psi_dot"]))
     if method == "DOP853":
         for name, value in (("step", step), ("order", order)):
             if value is not None:
@@ -391,7 +416,7 @@ def integrate_heavy_top(params: Mapping[str, float], initial: Mapping[str, float
                                         "with method='DOP853'")
         rtol = 1e-10 if rtol is None else check_positive(rtol, "rtol")
         atol = rtol / 100 if atol is None else check_positive(atol, "atol")
-        return _run_dop853(p, w0, q0, t, rtol, atol, estimate_error, backend)
+        return _run_dop853(p, w0, q0, args0, rates, t, rtol, atol, estimate_error, backend)
     for name, value in (("rtol", rtol), ("atol", atol)):
         if value is not None:
             raise InvalidInputError(f"expected `{name}` only with method='DOP853', got {name}={value!r} "
@@ -400,7 +425,7 @@ def integrate_heavy_top(params: Mapping[str, float], initial: Mapping[str, float
         raise InvalidInputError("expected a step size `step` > 0 with method='splitting', got step=None")
     step = check_positive(step, "step")
     order = _check_order(4 if order is None else order)
-    return _run_splitting(p, w0, q0, t, step, order, estimate_error, backend)
+    return _run_splitting(p, w0, q0, args0, rates, t, step, order, estimate_error, backend)
 
 
 def integrate_heavy_top_ensemble(params: Mapping[str, Any], initial: Mapping[str, Any], t_eval: Sequence[float], *,
@@ -457,26 +482,58 @@ def integrate_heavy_top_ensemble(params: Mapping[str, Any], initial: Mapping[str
 
 # --- the two methods -------------------------------------------------------------------------
 
-def _finish(p: dict, t: np.ndarray, omega: np.ndarray, q_raw: np.ndarray, *, method: str, order: int | None,
-            n_evaluations: int, n_steps: int | None, wall: float, reference: tuple[np.ndarray, np.ndarray] | None,
-            kind: str, richardson: float = 1.0, backend: str = "python") -> HeavyTopTrajectory:
+def _finish(p: dict, t: np.ndarray, run: tuple, rates: tuple[float, float], *, method: str, order: int | None,
+            n_evaluations: int, n_steps: int | None, wall: float, reference: tuple | None, kind: str,
+            factor: float = 1.0, backend: str = "python") -> HeavyTopTrajectory:
+    """The trajectory from ``run`` = (ω (N, 3), raw q (N, 4), tracked (σ, δ) (N, 2), closest [2], near
+    (2, DECADES)) and the same of a reference run (or None), whose distance × ``factor`` gives the
+    estimates; ``rates`` = (φ̇0, ψ̇0) for a top that sleeps exactly (see :func:`_sleeping_split`)."""
+    omega, q_raw, args, closest, near = run
     quat, norm_drift = _project(q_raw)
-    w_err = a_err = None
+    angles = euler_angles_from_half_angles(quat, _sleeping_split(quat, args, rates))
+    w_err = rot_err = eul_err = all_err = None
+    n_unresolved = 0
     if reference is not None:
-        w_ref, q_ref = reference
+        w_ref, q_ref, args_ref, _, near_ref = reference
         q_ref = q_ref / np.linalg.norm(q_ref, axis=-1, keepdims=True)
-        w_err = float(np.max(np.abs(w_ref - omega)) * richardson)
-        a_err = float(np.max(_rotation_angle_between(quat, q_ref)) * richardson)
+        ang_ref = euler_angles_from_half_angles(q_ref, _sleeping_split(q_ref, args_ref, rates))
+        est = output_error_estimates((omega, quat, angles, near), (w_ref, q_ref, ang_ref, near_ref), factor)
+        w_err, rot_err, eul_err = est["omega"], est["rotation"], est["euler"]
+        n_unresolved = est["unresolved_passages"]
+        all_err = max(w_err, rot_err, eul_err)
+        if n_unresolved:
+            kind += (f"; the apex passed {n_unresolved} time(s) closer to the pole (or the bottom) than the error "
+                     "of R: the turns of φ and ψ are then not determined (2π each time; φ ± ψ and R are)")
     e, pf, ps = _drifts(omega, quat, p)
-    return HeavyTopTrajectory(t=t, omega=omega, quaternion=quat, params=p, method=method, order=order,
-                              energy_drift=float(e), p_phi_drift=float(pf), p_psi_drift=float(ps),
+    return HeavyTopTrajectory(t=t, omega=omega, quaternion=quat, euler_angles=angles, params=p, method=method,
+                              order=order, energy_drift=float(e), p_phi_drift=float(pf), p_psi_drift=float(ps),
                               quaternion_norm_drift=float(norm_drift), n_evaluations=n_evaluations, n_steps=n_steps,
-                              omega_error_estimate=w_err, angle_error_estimate=a_err, error_estimate_kind=kind,
-                              wall_time=wall, backend=backend)
+                              omega_error_estimate=w_err, rotation_error_estimate=rot_err,
+                              euler_angle_error_estimate=eul_err, angle_error_estimate=all_err,
+                              error_estimate_kind=kind, wall_time=wall, backend=backend,
+                              unresolved_passages=n_unresolved,
+                              pole_clearance=(float(closest[1]), float(closest[0])))
+
+
+def _sleeping_split(q: np.ndarray, args: np.ndarray, rates: tuple[float, float]) -> np.ndarray:
+    """(σ, δ) with the split of the turning between φ and ψ of the initial rates where only their sum exists.
+
+    A top that sleeps exactly at θ = 0 (q1 = q2 = 0 throughout) turns by φ + ψ only: the tracker
+    holds δ = (φ - ψ)/2 and φ, ψ would share the turning equally.  The closed form (and the scene
+    file) give φ = φ0 + φ̇0 t, ψ = ψ0 + ψ̇0 t, so δ - δ0 = κ (σ - σ0), κ = (φ̇0 - ψ̇0)/(φ̇0 + ψ̇0);
+    at θ = π (q0 = q3 = 0 throughout) likewise σ - σ0 = κ' (δ - δ0), κ' = (φ̇0 + ψ̇0)/(φ̇0 - ψ̇0).
+    """
+    phi_dot, psi_dot = rates
+    out = args.copy()
+    if not np.any(q[:, 1:3]) and phi_dot + psi_dot != 0.0:
+        out[:, 1] = args[0, 1] + (phi_dot - psi_dot) / (phi_dot + psi_dot) * (args[:, 0] - args[0, 0])
+    elif not np.any(q[:, [0, 3]]) and phi_dot - psi_dot != 0.0:
+        out[:, 0] = args[0, 0] + (phi_dot + psi_dot) / (phi_dot - psi_dot) * (args[:, 1] - args[0, 1])
+    return out
 
 
 def _scipy_rhs(args: tuple) -> Callable[[float, np.ndarray], list]:
-    """f(t, y) for solve_ivp: the compiled-to-Python (ω̇, q̇) at the parameter values ``args``."""
+    """f(t, y) for SciPy's DOP853: the compiled-to-Python (ω̇, q̇) at the parameter values ``args``."""
     rhs = _rhs()
 
     def fun(_t: float, y: np.ndarray) -> list:
@@ -484,8 +541,8 @@ def _scipy_rhs(args: tuple) -> Callable[[float, np.ndarray], list]:
     return fun
 
 
-def _run_dop853(p: dict, w0: np.ndarray, q0: np.ndarray, t: np.ndarray, rtol: float, atol: float,
-                estimate_error: bool, backend: str) -> HeavyTopTrajectory:
+def _run_dop853(p: dict, w0: np.ndarray, q0: np.ndarray, args0: tuple[float, float], rates: tuple[float, float],
+                t: np.ndarray, rtol: float, atol: float, estimate_error: bool, backend: str) -> HeavyTopTrajectory:
     args = tuple(_param_values(p))
     y0 = np.concatenate([w0, q0])
     compiled = None if backend == "scipy" else _compiled_dop853()
@@ -494,15 +551,16 @@ def _run_dop853(p: dict, w0: np.ndarray, q0: np.ndarray, t: np.ndarray, rtol: fl
         raise unavailable_error("heavy_top", "scipy")
     fun = None if compiled is not None else _scipy_rhs(args)
 
-    sol, wall, ref, kind = run_dop853(fun, t, y0, rtol, atol, reference=estimate_error, compiled=compiled,
-                                      params=args)
+    sol, wall, ref, kind, factor = run_dop853(fun, t, y0, rtol, atol, reference=estimate_error, compiled=compiled,
+                                              params=args, track=(3, args0))
     reference = None
     if ref is not None:
-        reference = (ref.y[:3].T, ref.y[3:].T)
-        kind = f"distance to {kind}"
-    return _finish(p, t, sol.y[:3].T.copy(), sol.y[3:].T.copy(), method="DOP853", order=None,
-                   n_evaluations=int(sol.nfev), n_steps=sol.steps, wall=wall, reference=reference, kind=kind,
-                   backend="scipy" if compiled is None else "c")
+        reference = (ref.y[:3].T, ref.y[3:].T, ref.args, ref.closest, ref.near)
+        kind = f"distance to {kind}; ω, R and the Euler angles"
+    return _finish(p, t, (sol.y[:3].T.copy(), sol.y[3:].T.copy(), sol.args, sol.closest, sol.near), rates,
+                   method="DOP853",
+                   order=None, n_evaluations=int(sol.nfev), n_steps=sol.steps, wall=wall, reference=reference,
+                   kind=kind, factor=factor, backend="scipy" if compiled is None else "c")
 
 
 def _compiled_splitting() -> Any:
@@ -517,28 +575,35 @@ def _compiled_splitting() -> Any:
     return compiled_splitting("heavy_top", build)
 
 
-def _splitting_path(p: dict, w0: np.ndarray, q0: np.ndarray, t: np.ndarray, step: float,
-                    weights: tuple[float, ...], refine: int = 1,
-                    compiled: Any = None) -> tuple[np.ndarray, np.ndarray, int]:
+def _splitting_path(p: dict, w0: np.ndarray, q0: np.ndarray, args0: tuple[float, float], t: np.ndarray,
+                    step: float, weights: tuple[float, ...], refine: int = 1,
+                    compiled: Any = None) -> tuple[tuple, int]:
+    """((ω, raw q, (σ, δ), closest, near) at ``t``, composed steps): the state after every step is
+    followed by :func:`~mechderive.solvers.half_angles.follow_fixed_steps`, so the angles' turns are
+    counted per step."""
     inertia = np.array([p["I1"], p["I1"], p["I3"]])
     par = _param_values(p)
-    y = [*(inertia * w0).tolist(), *q0.tolist()]
+    y0 = np.array([*(inertia * w0), *q0])
+    stage = None if compiled is not None else _stage()
+
+    def advance(y: np.ndarray, pieces: list[tuple[int, float]]) -> np.ndarray:
+        if compiled is not None:
+            return compiled.propagate_recorded(y, par, pieces, weights)
+        rows = [y.tolist()]
+        for n, h in pieces:
+            end = kick_drift.propagate(stage, rows[-1], par, h, n, weights, record=rows)
+            rows.append(end)
+        return np.array(rows)
+
     intervals = _interval_steps(t, step, refine)
-    n_total = sum(n for n, _ in intervals)
-    if compiled is not None:
-        arr = compiled.propagate(y, par, intervals, weights)
-    else:
-        stage = _stage()
-        ys = [y]
-        for n, h in intervals:
-            y = kick_drift.propagate(stage, y, par, h, n, weights)
-            ys.append(y)
-        arr = np.array(ys)
-    return arr[:, :3] / inertia, arr[:, 3:], n_total
+    ends, args, tracker = follow_fixed_steps(y0, inertia, args0, intervals, advance)
+    arr = np.vstack([y0, ends])
+    return (arr[:, :3] / inertia, arr[:, 3:], args, tracker.closest, tracker.near), sum(n for n, _ in intervals)
 
 
-def _run_splitting(p: dict, w0: np.ndarray, q0: np.ndarray, t: np.ndarray, step: float, order: int,
-                   estimate_error: bool, backend: str = "auto") -> HeavyTopTrajectory:
+def _run_splitting(p: dict, w0: np.ndarray, q0: np.ndarray, args0: tuple[float, float], rates: tuple[float, float],
+                   t: np.ndarray, step: float, order: int, estimate_error: bool,
+                   backend: str = "auto") -> HeavyTopTrajectory:
     weights = SPLITTING_ORDERS[order]
     # compile (once per process) outside the timed run
     compiled = None if backend == "python" else _compiled_splitting()
@@ -548,14 +613,16 @@ def _run_splitting(p: dict, w0: np.ndarray, q0: np.ndarray, t: np.ndarray, step:
     if compiled is None:
         _stage()
     start = time.perf_counter()
-    omega, q_raw, n_steps = _splitting_path(p, w0, q0, t, step, weights, compiled=compiled)
+    run, n_steps = _splitting_path(p, w0, q0, args0, t, step, weights, compiled=compiled)
     wall = time.perf_counter() - start
     reference, kind, factor = None, "not requested", 1.0
     if estimate_error:
-        w_fine, q_fine, _ = _splitting_path(p, w0, q0, t, step, weights, refine=2, compiled=compiled)
-        reference, factor = (w_fine, q_fine), 2.0**order / (2.0**order - 1.0)
-        kind = f"Richardson: max |y_h - y_(h/2)| · 2^{order}/(2^{order} - 1), y = ω and the orientation"
+        reference, _ = _splitting_path(p, w0, q0, args0, t, step, weights, refine=2, compiled=compiled)
+        factor = RICHARDSON_MARGIN * 2.0**order / (2.0**order - 1.0)
+        kind = (f"Richardson: max |y_h - y_(h/2)| · 2^{order}/(2^{order} - 1) · {RICHARDSON_MARGIN}, y = ω, the "
+                "orientation and the "
+                "Euler angles")
     n_stage = n_steps * kick_drift.stages_per_step(weights) + (len(t) - 1)
-    return _finish(p, t, omega, q_raw, method="splitting", order=order, n_evaluations=n_stage, n_steps=n_steps,
-                   wall=wall, reference=reference, kind=kind, richardson=factor,
+    return _finish(p, t, run, rates, method="splitting", order=order, n_evaluations=n_stage, n_steps=n_steps,
+                   wall=wall, reference=reference, kind=kind, factor=factor,
                    backend="python" if compiled is None else "c")
