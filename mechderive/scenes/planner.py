@@ -359,19 +359,37 @@ def _free_exact(scene: Scene, t: np.ndarray) -> tuple[dict, dict, Any]:
     return cols, info, sol
 
 
+#: The integrated free top's estimate that covers each output family of :func:`_free_needs`.
+_FREE_ESTIMATES = {"omega": "omega_error_estimate", "rotation": "rotation_error_estimate",
+                   "quaternion": "rotation_error_estimate", "euler_angles": "euler_angle_error_estimate"}
+
+
+def _free_integrated_estimate(traj: Any, need: list[str]) -> float | None:
+    """The largest of the run's measured estimates over the families the scene outputs.
+
+    A scene of ω columns alone is not charged with the Euler angles' 2π per unresolved pole
+    passage; one that outputs angles is.
+    """
+    values = [getattr(traj, _FREE_ESTIMATES[k]) for k in need]
+    if any(v is None for v in values):
+        return None
+    return float(max(np.max(v) for v in values))
+
+
 def _free_integrate(scene: Scene, t: np.ndarray) -> tuple[dict, dict, Any]:
-    from ..kinematics.rotations import continuous_euler_angles, euler_angles_from_matrix
     from ..systems.free_top.integrate import integrate_free_top
 
     moments, w0, R0 = _free_setup(scene)
+    need = _free_needs(scene.quantities)
     traj, attempts = _integrate_to_rtol(
         lambda tol: integrate_free_top(moments, w0, t, R0=R0, method="DOP853", rtol=tol, atol=tol * 1e-3,
                                        strict=scene.strict),
-        lambda tr: None if tr.error_estimate is None else float(np.max(tr.error_estimate)), scene.rtol)
-    cols = _free_columns(scene.quantities, lambda: traj.omega, lambda: traj.R,
-                         lambda: continuous_euler_angles(euler_angles_from_matrix(traj.R)),
+        lambda tr: _free_integrated_estimate(tr, need), scene.rtol)
+    # The Euler angles are counted along the integrator's own steps (never unwrapped from the
+    # samples, which aliases at coarse sampling).
+    cols = _free_columns(scene.quantities, lambda: traj.omega, lambda: traj.R, lambda: traj.euler_angles,
                          lambda: traj.quaternion, moments)
-    info = {"error_estimate": float(np.max(traj.error_estimate)) if traj.error_estimate is not None else None,
+    info = {"error_estimate": _free_integrated_estimate(traj, need),
             "integrator": f"DOP853 ({'compiled C' if traj.backend == 'c' else 'SciPy solve_ivp'})",
             "integrator_attempts": attempts,
             "rhs_evaluations": int(traj.n_evaluations)}
