@@ -187,12 +187,12 @@ def _frame_with_L_vertical(I: tuple, w0: tuple) -> np.ndarray:
 
 # SciPy's stepper on the reproduction only: it takes the same steps by the same algorithm
 @pytest.mark.parametrize("I, w0, backend", [
-    _with_c((1.0, 1e3, 1e3), (1.0, 0.5, 1.0),        # the reproduction: a rod (symmetric, I1 ≪ I2 = I3)
+    _with_c((1.0, 1e3, 1e3), (1.0, 0.5, 1.0)),        # the reproduction: a rod (symmetric, I1 ≪ I2 = I3)
     ((1.0, 1e3, 1e3), (1.0, 0.5, 1.0), "scipy"),
-    _with_c((1e-3, 1.0, 1.0), (0.3, 1.0, 0.2),       # a thinner rod
-    _with_c((1.0, 1e3, 1000.5), (1.0, 0.5, 1.0),     # a rod, slightly asymmetric
-    _with_c((1e3, 1e3, 2e3), (1.0, 0.4, 0.7),        # a flat plate, I1 + I2 = I3
-    _with_c((1.0, 2.0, 3.0), (1.0, 0.5, 1.0),        # the tumbling scene
+    _with_c((1e-3, 1.0, 1.0), (0.3, 1.0, 0.2)),       # a thinner rod
+    _with_c((1.0, 1e3, 1000.5), (1.0, 0.5, 1.0)),     # a rod, slightly asymmetric
+    _with_c((1e3, 1e3, 2e3), (1.0, 0.4, 0.7)),        # a flat plate, I1 + I2 = I3
+    _with_c((1.0, 2.0, 3.0), (1.0, 0.5, 1.0)),        # the tumbling scene
 ])
 def test_free_top_estimate_covers_omega_R_and_the_angles(I, w0, backend):
     t = np.linspace(0.0, 100.0, 11)
