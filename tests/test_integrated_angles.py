@@ -305,3 +305,17 @@ def test_passages_are_read_at_the_decade_above_the_distance():
     assert passages_within(near, 3e-6) == 1     # read below 1e-5 ≥ 3e-6
     assert passages_within(near, 2e-10) == 3    # below 1e-9
     assert passages_within(near, 0.5) == 0
+
+
+# --- the splittings' estimate covers their accumulated rounding ----------------------------------
+
+@pytest.mark.parametrize("psi_dot, order, step", [(3.0, 6, 1e-3), (3.0, 4, 1e-3), (200.0, 6, 1e-3)])
+def test_splitting_estimate_covers_its_rounding(psi_dot, order, step):
+    # Richardson's |y_h − y_h/2| sees the truncation error only: at these steps the splitting's
+    # ~1e-12 error is accumulated rounding, which the floor 4 √steps ε must cover (closed form: ~1e-13).
+    initial = dict(theta=0.4, theta_dot=1.0, psi_dot=psi_dot)
+    t = np.linspace(0.0, 10.0, 101)
+    ex = _heavy_exact(TOP, initial, t)
+    run = integrate_heavy_top(TOP, initial, t, method="splitting", order=order, step=step)
+    assert float(np.max(np.abs(run.euler_angles - ex["angles"]))) <= run.euler_angle_error_estimate
+    assert float(np.max(np.abs(run.omega - ex["omega"]))) <= run.omega_error_estimate

@@ -490,7 +490,8 @@ def _finish(inertia: np.ndarray, t: np.ndarray, run: tuple, *, method: str, orde
         w_ref, q_ref, args_ref, near_ref = reference
         q_ref = q_ref / np.linalg.norm(q_ref, axis=-1, keepdims=True)
         est = output_error_estimates((omega, quat, angles, near),
-                                     (w_ref, q_ref, euler_angles_from_half_angles(q_ref, args_ref), near_ref), factor)
+                                     (w_ref, q_ref, euler_angles_from_half_angles(q_ref, args_ref), near_ref), factor,
+                                     n_steps)
         err = max(est["omega"], est["rotation"], est["euler"])
         if est["unresolved_passages"]:
             kind += (f"; e3 passed {est['unresolved_passages']} time(s) closer to ±ẽ3 than the error of R: the "

@@ -497,7 +497,8 @@ def _finish(p: dict, t: np.ndarray, run: tuple, rates: tuple[float, float], *, m
         w_ref, q_ref, args_ref, _, near_ref = reference
         q_ref = q_ref / np.linalg.norm(q_ref, axis=-1, keepdims=True)
         ang_ref = euler_angles_from_half_angles(q_ref, _sleeping_split(q_ref, args_ref, rates))
-        est = output_error_estimates((omega, quat, angles, near), (w_ref, q_ref, ang_ref, near_ref), factor)
+        est = output_error_estimates((omega, quat, angles, near), (w_ref, q_ref, ang_ref, near_ref), factor,
+                                     n_steps)
         w_err, rot_err, eul_err = est["omega"], est["rotation"], est["euler"]
         n_unresolved = est["unresolved_passages"]
         all_err = max(w_err, rot_err, eul_err)
