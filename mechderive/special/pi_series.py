@@ -49,6 +49,12 @@ class PiSeries:
     def __call__(self, u: np.ndarray) -> np.ndarray:
         """Π(n_i; am u | m) at u (any shape): shape (k, *u.shape)."""
         u = np.asarray(u, dtype=float)
+        shape = (len(self.n),) + (1,) * u.ndim
+        return self.mean.reshape(shape) * u + self.periodic(u)
+
+    def periodic(self, u: np.ndarray) -> np.ndarray:
+        """Π(n_i; am u | m) - a₀u, the bounded 2K-periodic part (no cancellation against a₀u), shape (k, *u.shape)."""
+        u = np.asarray(u, dtype=float)
         theta = (np.pi / self.K) * u
         c2 = 2.0 * np.cos(theta)
         # Clenshaw for Σ_{k=1}^{N} s_k sin(kθ): y_k = s_k + 2cos θ y_{k+1} - y_{k+2}, sum = y_1 sin θ
@@ -57,7 +63,7 @@ class PiSeries:
         y2 = np.zeros_like(y1)
         for k in range(self.sine.shape[1] - 1, -1, -1):
             y1, y2 = self.sine[:, k].reshape(shape) + c2 * y1 - y2, y1
-        return self.mean.reshape(shape) * u + y1 * np.sin(theta)
+        return y1 * np.sin(theta)
 
 
 def fit_pi_series(n: np.ndarray, sn_squared, K: float) -> PiSeries | None:

@@ -74,20 +74,23 @@ _MAX_COUNT = 2.0**50
 
 @dataclass(frozen=True)
 class _Orientation:
-    """Constants of the orientation (φ', the L frame), computed on the first request for R(t)."""
+    """Constants of the orientation (φ', the L frame), computed on the first request for R(t).
+
+    φ'(t) = φ'0 + ν t + (c2/λ) [p(u) - p(u0)], where Π(n; am u | m) = (Π(n|m)/K) u + p(u) splits
+    the elliptic integral into its mean and its bounded 2K-periodic part p (on the separatrix
+    Π(n|m)/K → 1/(1 - n)).  ν = c1 + c2 Π(n|m)/K is the mean precession rate; ν t is reduced
+    modulo 2π in double-double, and p never grows, so no term loses digits at long times.
+    """
 
     S: np.ndarray
     phi0: float
-    c1: DD  # |L|/I_z, the uniform part of φ̇
+    nu: DD  # the mean precession rate c1 + c2·Π(n|m)/K
     c2_over_lam: float
     n: float
-    half: DD | None  # (c2/λ)·2Π(n|m): φ' gained per half period 2K beyond c1·t (None on the separatrix)
-    Pi_c: float  # Π(n|m)
-    h0: float  # half periods in u0 = 2·h0·K + r0
-    pi_r0: float  # Π(n; am r0|m) as evaluated in double (so φ'(0) = φ'0 exactly)
+    slope: float  # tiny 1 - m: 1/(1 - n) - Π(n|m)/K, the small slope left in p on each quarter period
+    pi_c_over_K: float  # Π(n|m)/K (the Carlson fallback subtracts it)
+    p0: float  # p(u0) as evaluated in double (so φ'(0) = φ'0 exactly)
     dphi: DD | None  # precession per polhode period
-    rate_inf: DD | None  # separatrix: the asymptotic precession rate c1 + c2/(1 - n)
-    arctan_u0: float  # separatrix: arctan(√(-n) tanh u0)
 
 
 def _l_frame(L_space: np.ndarray) -> np.ndarray:
@@ -133,6 +136,9 @@ class _Jacobi:
     c: np.ndarray
     d: np.ndarray
 
+    def __getitem__(self, index) -> "_Jacobi":
+        return _Jacobi(*(getattr(self, f)[index] for f in ("q", "v", "sn", "cn", "dn", "s", "c", "d")))
+
 
 @dataclass(frozen=True)
 class FreeTopSolution:
@@ -167,6 +173,7 @@ class FreeTopSolution:
     _kc: tuple[float, int] = (1.0, 0)  # k' = √(1 - m) as mantissa·2^exp
     _tiny: bool = False  # 1 - m < 1e-34: v-values are tanh, sech, sech
     _L_unit: tuple[float, float, float] = (0.0, 0.0, 1.0)  # (I_x P, I_y Q, I_z S)/|L|
+    _ab_unit: tuple[float, float] = (1.0, 1.0)  # (I_x P, I_y Q)/max(|I_x P|, |I_y Q|): their ratio, never denormal
     _t_max: float = float("inf")
     _spin: tuple = (None, None)  # steady: (|ω| as DD, unit ω)
     _mp: dict = field(default_factory=dict, repr=False)  # 40-digit setup values, caches
@@ -200,12 +207,15 @@ class FreeTopSolution:
 
     # --- the phase and the Jacobi functions --------------------------------------------------
 
-    def _jacobi(self, t: np.ndarray) -> _Jacobi:
-        """sn, cn, dn at u(t) = λt + u0, reduced to the nearest quarter period (cached for one t)."""
-        key = ("jacobi", t.shape, hash(t.tobytes()))
-        hit = self._mp.get("jacobi")
-        if hit is not None and hit[0] == key:
-            return hit[1]
+    def _jacobi(self, t: np.ndarray, *, keep: bool = True) -> _Jacobi:
+        """sn, cn, dn at u(t) = λt + u0, reduced to the nearest quarter period.
+
+        The last evaluation is kept (``keep``) for :meth:`error_estimate`, which checks exactly
+        what was output; its own extra points (t = 0, quadrature nodes) pass ``keep=False``.
+        """
+        hit = self._cached("jacobi", t)
+        if hit is not None:
+            return hit
         q, v, v_lo = reduce_phase_nearest(self._lam, self._v0, self._quarter, t)
         q = q + self._q0
         if self._quarter is None or self._tiny:
@@ -229,8 +239,17 @@ class FreeTopSolution:
         cn = np.where(odd, -sign * _ldexp(s / d, self._kc), sign * c)
         dn = np.where(odd, _ldexp(1.0 / d, self._kc), d)
         out = _Jacobi(q, v, sn, cn, dn, s, c, d)
-        self._mp["jacobi"] = (key, out)
-        return out
+        return self._store("jacobi", t, out) if keep else out
+
+    def _cached(self, what: str, t: np.ndarray):
+        """The last evaluation of ``what`` at exactly these times, if kept (for :meth:`error_estimate`)."""
+        hit = self._mp.get(what)
+        return hit[1] if hit is not None and hit[0] == (t.shape, t.tobytes()) else None
+
+    def _store(self, what: str, t: np.ndarray, value):
+        # one entry per quantity, keyed by the exact times: the estimate re-uses what was output
+        self._mp[what] = ((t.shape, t.tobytes()), value)
+        return value
 
     # --- angular velocity --------------------------------------------------------------------
 
@@ -262,34 +281,48 @@ class FreeTopSolution:
                 np.array([n]), self.m, self.m1, self._quarter.hi)
         return self._mp["pi_series"]
 
-    def _pi_of_r(self, e: np.ndarray, v: np.ndarray, o: _Orientation) -> np.ndarray:
-        """Π(n; am r | m) at r = e·K + v, e ∈ {0, 1}, |v| ≤ K/2."""
+    def _periodic_pi(self, J: _Jacobi, o: _Orientation) -> np.ndarray:
+        """p(u) = Π(n; am u | m) - (Π(n|m)/K) u, bounded and 2K-periodic, at u = q·K + v."""
+        k = np.sqrt(-o.n)
+        atan_part = k * np.arctan(k * np.tanh(J.v)) / (1 - o.n)
+        if self._quarter is None:
+            # Separatrix (m = 1): Π(n; am u | 1) = [u + √-n arctan(√-n tanh u)]/(1 - n) (partial
+            # fractions, with atanh(tanh u) = u exactly), and Π(n|m)/K → 1/(1 - n).
+            return atan_part
+        odd = np.mod(J.q, 2.0) == 1.0
         if self._tiny:
-            # piecewise separatrix motion: ∫₀^v dw/(1 - n tanh² w) = [v + √-n arctan(√-n tanh v)]/(1 - n)
-            # (partial fractions, as on the separatrix), and 1/(1 - n cd² w) = 1/(1 - n) to O(k') past K
-            k = np.sqrt(-o.n)
-            even = (v + k * np.arctan(k * np.tanh(v))) / (1 - o.n)
-            return np.where(e == 1.0, o.Pi_c + v / (1 - o.n), even)
-        r = e * self._quarter.hi + v
+            # Piecewise separatrix motion: on an even quarter ∫₀^v dw/(1 - n tanh² w) is the separatrix
+            # integral above; past K, 1/(1 - n cd² w) = 1/(1 - n) to O(k').  So p = slope·v (+ the
+            # arctan on even quarters), p(K) = 0 by symmetry.
+            return o.slope * J.v + np.where(odd, 0.0, atan_part)
+        r = np.where(odd, self._quarter.hi, 0.0) + J.v
         series = self._pi_series(o.n)
         if series is not None:
-            return series(r)[0]
+            return series.periodic(r)[0]
         # Carlson from sn, cn, dn of r: through a rounded am(r) the error would be amplified by
         # 1/((1 - n sin²A) dn) ~ 1/√(1 - m) at the saddle passages near the separatrix.
         from ...special.integrals import pi_of_am
 
-        return np.asarray(pi_of_am(o.n, r, self.m, m1=self.m1))
+        return np.asarray(pi_of_am(o.n, r, self.m, m1=self.m1)) - o.pi_c_over_K * r
 
-    def _angles(self, t: np.ndarray, *, continuous: bool):
+    def _angles(self, t: np.ndarray, *, continuous: bool, keep: bool = True):
         """Euler angles (φ', θ', ψ') of the relabelled body relative to the L frame.
 
         With ``continuous=False`` φ' and ψ' are reduced modulo 2π exactly (for R);
         otherwise they are unwrapped in time (plain floats).
         """
-        J = self._jacobi(t)
+        return self._angles_at(self._jacobi(t, keep=keep), t, continuous=continuous)
+
+    def _rotation_at(self, J: _Jacobi, t: np.ndarray) -> np.ndarray:
+        """R from the Jacobi values J at the times t."""
+        phi, theta, psi = self._angles_at(J, t, continuous=False)
+        return self._perm.T @ rotation_matrix(phi, theta, psi) @ self._S
+
+    def _angles_at(self, J: _Jacobi, t: np.ndarray, *, continuous: bool):
         o = self._orient
         a, b, c = self._L_unit
         theta = np.arctan2(np.hypot(a * J.cn, b * J.sn), c * J.dn)
+        a, b = self._ab_unit
         # am(u) = q·π/2 + δ, δ = am(v) (even q) or atan(k' tan am v) (odd q): am(K + v) = π/2 + arctan(k' sd v / cd v·dn v)
         qm = np.mod(J.q, 4.0)
         odd = (qm == 1.0) | (qm == 3.0)
@@ -299,22 +332,10 @@ class FreeTopSolution:
         corr = np.arctan2(sa * sb * (abs(a) - abs(b)) * J.sn * J.cn, abs(b) * J.sn**2 + abs(a) * J.cn**2)
         quarters = J.q if continuous else qm
         psi = sa * np.pi / 2 - sa * sb * (quarters * (np.pi / 2) + delta) + corr
-        if o.half is None:
-            # Separatrix (m = 1): Π(n; am u | 1) = [u + √-n arctan(√-n tanh u)]/(1 - n) (partial
-            # fractions, with atanh(tanh u) = u exactly).  The linear parts combine into one rate,
-            # reduced mod 2π in double-double, so nothing cancels however long the run.
-            k = np.sqrt(-o.n)
-            bounded = o.c2_over_lam * k / (1 - o.n) * (np.arctan(k * np.tanh(J.v)) - o.arctan_u0)
-            linear = o.rate_inf.hi * t if continuous else mod_two_pi(o.rate_inf, t)
-            return o.phi0 + linear + bounded, theta, psi
-        e = np.mod(J.q, 2.0)
-        halves = (J.q - e) / 2 - o.h0
-        local = o.c2_over_lam * (self._pi_of_r(e, J.v, o) - o.pi_r0)
+        periodic = o.c2_over_lam * (self._periodic_pi(J, o) - o.p0)
         if continuous:
-            phi = o.phi0 + o.c1.hi * np.ldexp(t, o.c1.exp) + (o.half.hi + o.half.lo) * halves + local
-        else:
-            phi = o.phi0 + mod_two_pi(o.c1, t) + mod_two_pi(o.half, halves) + local
-        return phi, theta, psi
+            return o.phi0 + (o.nu.hi + o.nu.lo) * np.ldexp(t, o.nu.exp) + periodic, theta, psi
+        return o.phi0 + mod_two_pi(o.nu, t) + periodic, theta, psi
 
     def euler_angles(self, t: Any) -> np.ndarray:
         """Euler angles (φ, θ, ψ) of R(t), continuous in time; shape (..., 3).
@@ -336,16 +357,20 @@ class FreeTopSolution:
 
     def rotation(self, t: Any) -> np.ndarray:
         """The chapter's R(t) (rows = body axes in space components), shape (..., 3, 3)."""
-        t = self._times(t)
+        return self._rotation(self._times(t), keep=True)
+
+    def _rotation(self, t: np.ndarray, *, keep: bool) -> np.ndarray:
         if self.kind == "steady":
             # Ṙ = hat(ω) R with constant ω: R = exp(hat(ω t)) R0.  Reduce |ω| t mod 2π first.
             rate, axis = self._spin
             if rate is None:
                 return np.broadcast_to(self.R0, t.shape + (3, 3)).copy()
             return expm_so3(mod_two_pi(rate, t)[..., None] * axis) @ self.R0
-        phi, theta, psi = self._angles(t, continuous=False)
-        RL = rotation_matrix(phi, theta, psi)
-        return self._perm.T @ RL @ self._S
+        hit = self._cached("R", t)
+        if hit is not None:
+            return hit.copy()
+        R = self._rotation_at(self._jacobi(t, keep=keep), t)
+        return self._store("R", t, R).copy() if keep else R
 
     def quaternion(self, t: Any) -> np.ndarray:
         """Unit quaternion (scalar first) of the active rotation Rᵀ, sign kept continuous along t."""
@@ -425,6 +450,8 @@ def _setup(I: np.ndarray, w0: np.ndarray, R0: np.ndarray) -> FreeTopSolution:
     e = setup.elliptic_constants(I, w0)
     Ix, Iy, Iz = e.I_rel
     L_unit = tuple(float(i * amp / L_norm) for i, amp in zip(e.I_rel, (e.P, e.Q, e.S)))
+    ab = (e.I_rel[0] * e.P, e.I_rel[1] * e.Q)
+    ab_unit = tuple(float(x / max(abs(ab[0]), abs(ab[1]))) for x in ab)
     if e.K is None:
         kind, period, T, quarter, kc = "separatrix", None, float("inf"), None, (0.0, 0)
         nu = max(nu, e.lam)
@@ -437,7 +464,7 @@ def _setup(I: np.ndarray, w0: np.ndarray, R0: np.ndarray) -> FreeTopSolution:
         kind=kind, m=float(e.m), m1=float(e.m1), polhode_period=T, _perm=e.perm,
         _amp=(float(e.P), float(e.Q), float(e.S)), _lam=DD.scaled(e.lam), _u0=DD.of(e.u0), _period=period,
         _I_rel=(float(Ix), float(Iy), float(Iz)), _quarter=quarter, _q0=e.q0, _v0=DD.of(e.v0), _kc=kc,
-        _tiny=bool(e.K is not None and e.m1 < setup.TINY_M1), _L_unit=L_unit, _t_max=_t_max(nu),
+        _tiny=bool(e.K is not None and e.m1 < setup.TINY_M1), _L_unit=L_unit, _ab_unit=ab_unit, _t_max=_t_max(nu),
         _mp=dict(constants=e, L=L_norm), **common)
 
 
@@ -458,21 +485,16 @@ def _orientation_setup(sol: FreeTopSolution) -> _Orientation:
     S_frame = _l_frame(sol.R0.T @ L_dir)
     theta0, psi0 = setup.lframe_angles(e)
     phi0 = setup.initial_precession_angle(sol._perm @ sol.R0 @ S_frame.T, theta0, psi0)
-    c2_over_lam = float(c2 / e.lam)
     if e.K is None:
-        rate_inf = DD.scaled(c1 + c2 / (1 - n))
-        arctan_u0 = float(mpmath.atan(mpmath.sqrt(-n) * mpmath.tanh(e.v0)))
-        return _Orientation(S=S_frame, phi0=phi0, c1=DD.scaled(c1), c2_over_lam=c2_over_lam, n=float(n), half=None,
-                            Pi_c=float("inf"), h0=0.0, pi_r0=0.0, dphi=None, rate_inf=rate_inf, arctan_u0=arctan_u0)
-    from ...special.highprec import complete_pi_mp
+        pi_c_over_K, dphi = 1 / (1 - n), None
+    else:
+        from ...special.highprec import complete_pi_mp
 
-    Pi_c = complete_pi_mp(n, e.m1)
-    dphi = DD.of(c1 * 4 * e.K / e.lam + c2 / e.lam * 4 * Pi_c)
-    o = _Orientation(S=S_frame, phi0=phi0, c1=DD.scaled(c1), c2_over_lam=c2_over_lam, n=float(n),
-                     half=DD.of(c2 / e.lam * 2 * Pi_c), Pi_c=float(Pi_c), h0=0.0, pi_r0=0.0, dphi=dphi,
-                     rate_inf=None, arctan_u0=0.0)
-    # Π at the phase of t = 0, through the very evaluation used at every t: φ'(0) = φ'0 exactly.
-    J = sol._jacobi(np.zeros(1))
-    e0 = np.mod(J.q, 2.0)
-    pi_r0 = float(sol._pi_of_r(e0, J.v, o)[0])
-    return _Orientation(**{**o.__dict__, "h0": float((J.q[0] - e0[0]) / 2), "pi_r0": pi_r0})
+        pi_c_over_K = complete_pi_mp(n, e.m1) / e.K
+        dphi = DD.of((c1 + c2 * pi_c_over_K) * 4 * e.K / e.lam)
+    o = _Orientation(S=S_frame, phi0=phi0, nu=DD.scaled(c1 + c2 * pi_c_over_K), c2_over_lam=float(c2 / e.lam),
+                     n=float(n), slope=float(1 / (1 - n) - pi_c_over_K), pi_c_over_K=float(pi_c_over_K), p0=0.0,
+                     dphi=dphi)
+    # p(u0) through the very evaluation used at every t: φ'(0) = φ'0 exactly.
+    p0 = float(sol._periodic_pi(sol._jacobi(np.zeros(1), keep=False), o)[0])
+    return _Orientation(**{**o.__dict__, "p0": p0})
