@@ -80,7 +80,7 @@ def error_estimate(sol: "FreeTopSolution", t: Any, quantities: Sequence[str]) ->
     e_omega = _omega_estimate(sol, t, J, J0)
     if not want_R:
         return float(e_omega)
-    e_R = _rotation_estimate(sol, t, J0)
+    e_R = _rotation_estimate(sol, t, J, J0)
     if plan is not None:
         n_ends = plan["ends"].size
         e_R += _precession_estimate(sol, t, plan, P[k:k + n_ends], P[k + n_ends:])
@@ -99,24 +99,25 @@ def _steady(sol: "FreeTopSolution", t: np.ndarray) -> float:
 
 
 def _omega_at(sol: "FreeTopSolution", J) -> np.ndarray:
-    P, Q, S = sol._amp
+    """ω at the Jacobi values J, divided by 2^e (the amplitudes' scale): never denormal."""
+    (P, Q, S), _ = sol._amp_scaled
     return (np.stack([P * J.cn, Q * J.sn, S * J.dn], axis=-1)) @ sol._perm
 
 
 def _omega_estimate(sol: "FreeTopSolution", t: np.ndarray, J, J0) -> float:
-    w0 = np.array(sol.omega0)
-    scale = np.max(np.abs(w0))
-    w0s = w0 / scale
+    # everything in units of 2^e, the amplitudes' power-of-two scale (exact, and never denormal),
+    # and time in units of 2^-e s, so that Euler's equations keep their form (λ scales like ω)
+    (P, Q, S), e = sol._amp_scaled
+    w0s = np.ldexp(np.array(sol.omega0), -e)
     norm = np.linalg.norm(w0s)
-    P, Q, S = (a / scale for a in sol._amp)
-    lam = (sol._lam.hi + sol._lam.lo) * 2.0**sol._lam.exp / scale
-    Ix, Iy, Iz = sol._I_rel
+    lam = np.ldexp(sol._lam.hi + sol._lam.lo, sol._lam.exp - e)
+    Ix, Iy, Iz = np.array(sol._I_rel) / max(sol.moments)  # only ratios of moments enter
     m = 1.0 if (sol._tiny or sol._quarter is None) else sol.m
     # ω(0) - ω0, read as an error of the phase δu = |Δω|/|dω/du(0)| and propagated to the worst
     # point of the orbit, |dω/du| ≤ max(|P|, |Q|, m|S|); |dω/du| > 0 always (sn, cn never vanish together)
     slope0 = float(np.hypot(np.hypot(P * J0.sn * J0.dn, Q * J0.cn * J0.dn), m * S * J0.sn * J0.cn)[0])
     reach = max(1.0, max(abs(P), abs(Q), m * abs(S)) / slope0) if slope0 > 0 else 1.0
-    e_init = float(np.linalg.norm(_omega_at(sol, J0)[0] / scale - w0s)) / norm * reach
+    e_init = float(np.linalg.norm(_omega_at(sol, J0)[0] - w0s)) / norm * reach
     wx, wy, wz = P * J.cn, Q * J.sn, S * J.dn
     # the rounding of the output itself: 4 ulp of its largest component (the Jacobi functions'
     # own error, measured against mpmath in the special module's tests, is within that)
@@ -128,14 +129,15 @@ def _omega_estimate(sol: "FreeTopSolution", t: np.ndarray, J, J0) -> float:
         lam * Q * J.cn * J.dn - (Iz - Ix) / Iy * wz * wx,
         -lam * m * S * J.sn * J.cn - (Ix - Iy) / Iz * wx * wy])), initial=0.0)
     # conservation of 2T and L² (relative), against their values at t = 0 from the inputs
-    two_T0 = float(np.sum(np.array(sol.moments) * w0s**2))
-    L20 = float(np.sum((np.array(sol.moments) * w0s) ** 2))
+    moments = np.array(sol.moments) / max(sol.moments)
+    two_T0 = float(np.sum(moments * w0s**2))
+    L20 = float(np.sum((moments * w0s) ** 2))
     two_T = Ix * wx**2 + Iy * wy**2 + Iz * wz**2
     L2 = (Ix * wx) ** 2 + (Iy * wy) ** 2 + (Iz * wz) ** 2
     e_cons = float(np.max(np.abs(two_T - two_T0), initial=0.0)) / two_T0 + \
         float(np.max(np.abs(L2 - L20), initial=0.0)) / L20
     nu = max(lam, np.max(np.abs(w0s)) * max(Ix, Iy, Iz) / min(Ix, Iy, Iz))  # |ω̇|/|ω| ≤ this
-    t_span = float(np.max(np.abs(t), initial=0.0))
+    t_span = np.ldexp(float(np.max(np.abs(t), initial=0.0)), e)
     e_euler = rho / norm * (t_span + 1.0 / nu)
     e_period = _period_estimate(sol, J) * max(abs(P), abs(Q), abs(S)) / norm
     return e_round + e_init + e_cons + e_euler + e_period
@@ -158,16 +160,15 @@ def _period_estimate(sol: "FreeTopSolution", J) -> float:
     return dK * float(np.max(np.abs(J.q), initial=0.0) + 1)
 
 
-def _rotation_estimate(sol: "FreeTopSolution", t: np.ndarray, J0) -> float:
+def _rotation_estimate(sol: "FreeTopSolution", t: np.ndarray, J, J0) -> float:
     R = sol.rotation(t)
     e_round = 4 * float(np.spacing(1.0))  # 4 ulp of an entry of size 1: the rounding of R itself
     e_R0 = float(np.max(np.abs(sol._rotation_at(J0, np.zeros(1))[0] - sol.R0)))
-    I = np.array(sol.moments)
-    w = sol.omega(t)
-    scale = np.max(np.abs(sol.omega0))
-    L0 = sol.R0.T @ (I * np.array(sol.omega0) / scale)
+    I = np.array(sol.moments) / max(sol.moments)
+    _, e = sol._amp_scaled
+    L0 = sol.R0.T @ (I * np.ldexp(np.array(sol.omega0), -e))
     Ln = np.linalg.norm(L0)
-    L_space = np.einsum("...ab,...a->...b", R, I * w / scale)
+    L_space = np.einsum("...ab,...a->...b", R, I * _omega_at(sol, J))
     e_L = float(np.max(np.abs(L_space - L0), initial=0.0)) / Ln
     # A rotation by δ changes R by δ[n]×R, whose largest entry is at least δ·√2/3 (its Frobenius
     # norm is δ√2); a direction error of L by δ changes some component by at least δ/√3.  So
@@ -221,10 +222,10 @@ def _precession_estimate(sol: "FreeTopSolution", t: np.ndarray, plan: dict, J_en
     edges after removing that linear drift is a bounded error of φ' and counts once.
     """
     o = sol._orient
-    Ix, Iy, _ = sol._I_rel
+    Ix, Iy, _ = np.array(sol._I_rel) / max(sol.moments)
     a_hat, b_hat = sol._ab_unit  # (I_x P, I_y Q) / max: L_x, L_y up to a common factor
     Lx2, Ly2 = (a_hat * J_nodes.cn) ** 2, (b_hat * J_nodes.sn) ** 2
-    rate = sol.L_norm * (Lx2 / Ix + Ly2 / Iy) / (Lx2 + Ly2)
+    rate = (sol.L_norm / max(sol.moments)) * (Lx2 / Ix + Ly2 / Iy) / (Lx2 + Ly2)
     per_run = plan["weights"][0].size
     cumulative = [np.concatenate([[0.0], np.cumsum(np.sum(w * rate[k * per_run:(k + 1) * per_run].reshape(w.shape),
                                                           axis=1))]) for k, w in enumerate(plan["weights"])]

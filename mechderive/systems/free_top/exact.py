@@ -174,6 +174,7 @@ class FreeTopSolution:
     _tiny: bool = False  # 1 - m < 1e-34: v-values are tanh, sech, sech
     _L_unit: tuple[float, float, float] = (0.0, 0.0, 1.0)  # (I_x P, I_y Q, I_z S)/|L|
     _ab_unit: tuple[float, float] = (1.0, 1.0)  # (I_x P, I_y Q)/max(|I_x P|, |I_y Q|): their ratio, never denormal
+    _amp_scaled: tuple = ((0.0, 0.0, 0.0), 0)  # (P, Q, S)·2^-e and e, so that 1/2 ≤ max < 1: never denormal
     _t_max: float = float("inf")
     _spin: tuple = (None, None)  # steady: (|ω| as DD, unit ω)
     _mp: dict = field(default_factory=dict, repr=False)  # 40-digit setup values, caches
@@ -259,8 +260,9 @@ class FreeTopSolution:
         if self.kind == "steady":
             return np.broadcast_to(self._perm @ np.array(self.omega0), t.shape + (3,)).copy()
         J = self._jacobi(t)
-        P, Q, S = self._amp
-        return np.stack([P * J.cn, Q * J.sn, S * J.dn], axis=-1)
+        (P, Q, S), e = self._amp_scaled
+        # scaled by a power of two: exactly P·cn etc. in the normal range, rounded once if denormal
+        return np.ldexp(np.stack([P * J.cn, Q * J.sn, S * J.dn], axis=-1), e)
 
     def omega(self, t: Any) -> np.ndarray:
         """Body components (ω1, ω2, ω3) at times ``t`` (rad/s), shape (..., 3)."""
@@ -450,6 +452,8 @@ def _setup(I: np.ndarray, w0: np.ndarray, R0: np.ndarray) -> FreeTopSolution:
     e = setup.elliptic_constants(I, w0)
     Ix, Iy, Iz = e.I_rel
     L_unit = tuple(float(i * amp / L_norm) for i, amp in zip(e.I_rel, (e.P, e.Q, e.S)))
+    _, amp_exp = mpmath.frexp(max(abs(e.P), abs(e.Q), abs(e.S)))
+    amp_scaled = (tuple(float(mpmath.ldexp(a, -int(amp_exp))) for a in (e.P, e.Q, e.S)), int(amp_exp))
     ab = (e.I_rel[0] * e.P, e.I_rel[1] * e.Q)
     ab_unit = tuple(float(x / max(abs(ab[0]), abs(ab[1]))) for x in ab)
     if e.K is None:
@@ -464,7 +468,7 @@ def _setup(I: np.ndarray, w0: np.ndarray, R0: np.ndarray) -> FreeTopSolution:
         kind=kind, m=float(e.m), m1=float(e.m1), polhode_period=T, _perm=e.perm,
         _amp=(float(e.P), float(e.Q), float(e.S)), _lam=DD.scaled(e.lam), _u0=DD.of(e.u0), _period=period,
         _I_rel=(float(Ix), float(Iy), float(Iz)), _quarter=quarter, _q0=e.q0, _v0=DD.of(e.v0), _kc=kc,
-        _tiny=bool(e.K is not None and e.m1 < setup.TINY_M1), _L_unit=L_unit, _ab_unit=ab_unit, _t_max=_t_max(nu),
+        _tiny=bool(e.K is not None and e.m1 < setup.TINY_M1), _L_unit=L_unit, _ab_unit=ab_unit, _amp_scaled=amp_scaled, _t_max=_t_max(nu),
         _mp=dict(constants=e, L=L_norm), **common)
 
 
