@@ -113,11 +113,20 @@ def _omega_estimate(sol: "FreeTopSolution", t: np.ndarray, J, J0) -> float:
     lam = np.ldexp(sol._lam.hi + sol._lam.lo, sol._lam.exp - e)
     Ix, Iy, Iz = np.array(sol._I_rel) / max(sol.moments)  # only ratios of moments enter
     m = 1.0 if (sol._tiny or sol._quarter is None) else sol.m
-    # ω(0) - ω0, read as an error of the phase δu = |Δω|/|dω/du(0)| and propagated to the worst
-    # point of the orbit, |dω/du| ≤ max(|P|, |Q|, m|S|); |dω/du| > 0 always (sn, cn never vanish together)
-    slope0 = float(np.hypot(np.hypot(P * J0.sn * J0.dn, Q * J0.cn * J0.dn), m * S * J0.sn * J0.cn)[0])
-    reach = max(1.0, max(abs(P), abs(Q), m * abs(S)) / slope0) if slope0 > 0 else 1.0
-    e_init = float(np.linalg.norm(_omega_at(sol, J0)[0] - w0s)) / norm * reach
+    # ω(0) - ω0.  Within 8 ulp of each component it is the rounding of the evaluation (the Jacobi
+    # values and amplitudes: ≤ 5 ulp measured) and counts as such; beyond, it is evidence of a wrong
+    # phase or constant: read as a phase error δu = |Δω|/|dω/du(0)| and propagated to the worst point
+    # of the orbit, |dω/du| ≤ max(|P|, |Q|, m|S|) (|dω/du| > 0: sn, cn never vanish together).
+    diff = np.abs(_omega_at(sol, J0)[0] - w0s)
+    rounding = 8 * np.spacing(np.abs(w0s))
+    excess = float(np.linalg.norm(np.maximum(diff - rounding, 0.0)))
+    top = max(abs(P), abs(Q), m * abs(S))
+    slope0 = float(np.hypot(np.hypot(P / top * J0.sn * J0.dn, Q / top * J0.cn * J0.dn),
+                            m * S / top * J0.sn * J0.cn)[0]) if top > 0 else 0.0
+    reach = 1.0 / slope0 if slope0 > 0 else np.inf
+    e_init = float(np.linalg.norm(np.minimum(diff, rounding))) / norm
+    if excess > 0:
+        e_init += excess / norm * max(1.0, reach)
     wx, wy, wz = P * J.cn, Q * J.sn, S * J.dn
     # the rounding of the output itself: 4 ulp of its largest component (the Jacobi functions'
     # own error, measured against mpmath in the special module's tests, is within that)

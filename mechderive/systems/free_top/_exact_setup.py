@@ -174,6 +174,10 @@ def elliptic_constants(I: np.ndarray, w: np.ndarray) -> Elliptic:
     separatrix = G[y] == 0
     if separatrix:
         m, m1 = mpmath.mpf(1), mpmath.mpf(0)
+    elif m <= m1:  # the smaller of m, 1 - m keeps its relative digits; the other follows exactly
+        m1 = 1 - m
+    else:
+        m = 1 - m1
     # On the separatrix cn = sech u > 0 never changes sign, so P carries the sign of ω_x.
     P = mpmath.sqrt(P2) * (mpmath.sign(wr[0]) if separatrix else 1)
     S = mpmath.sign(wr[2]) * mpmath.sqrt(S2)

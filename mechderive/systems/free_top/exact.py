@@ -285,6 +285,8 @@ class FreeTopSolution:
 
     def _periodic_pi(self, J: _Jacobi, o: _Orientation) -> np.ndarray:
         """p(u) = Π(n; am u | m) - (Π(n|m)/K) u, bounded and 2K-periodic, at u = q·K + v."""
+        if o.n == 0:
+            return np.zeros_like(J.v)
         k = np.sqrt(-o.n)
         atan_part = k * np.arctan(k * np.tanh(J.v)) / (1 - o.n)
         if self._quarter is None:
@@ -496,7 +498,10 @@ def _orientation_setup(sol: FreeTopSolution) -> _Orientation:
 
         pi_c_over_K = complete_pi_mp(n, e.m1) / e.K
         dphi = DD.of((c1 + c2 * pi_c_over_K) * 4 * e.K / e.lam)
-    o = _Orientation(S=S_frame, phi0=phi0, nu=DD.scaled(c1 + c2 * pi_c_over_K), c2_over_lam=float(c2 / e.lam),
+    # n = 0 (a symmetric body, m = 0): Π(0; am u | 0) = u, p ≡ 0, and c2/λ (which may overflow when
+    # λ ∝ ω_z is tiny) is not needed
+    c2_over_lam = 0.0 if n == 0 else float(c2 / e.lam)
+    o = _Orientation(S=S_frame, phi0=phi0, nu=DD.scaled(c1 + c2 * pi_c_over_K), c2_over_lam=c2_over_lam,
                      n=float(n), slope=float(1 / (1 - n) - pi_c_over_K), pi_c_over_K=float(pi_c_over_K), p0=0.0,
                      dphi=dphi)
     # p(u0) through the very evaluation used at every t: φ'(0) = φ'0 exactly.
