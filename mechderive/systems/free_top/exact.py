@@ -283,6 +283,15 @@ class FreeTopSolution:
                 np.array([n]), self.m, self.m1, self._quarter.hi)
         return self._mp["pi_series"]
 
+    def _pi_panels(self, o: _Orientation):
+        """p by Chebyshev panels from the quarter periods (fitted once), where the series declines."""
+        if "pi_panels" not in self._mp:
+            from ...special import pi_series
+
+            self._mp["pi_panels"] = pi_series.fit_pi_panels(o.n, self.m, self.m1, self._quarter.hi,
+                                                            o.pi_c_over_K)
+        return self._mp["pi_panels"]
+
     def _periodic_pi(self, J: _Jacobi, o: _Orientation) -> np.ndarray:
         """p(u) = Π(n; am u | m) - (Π(n|m)/K) u, bounded and 2K-periodic, at u = q·K + v."""
         if o.n == 0:
@@ -299,12 +308,18 @@ class FreeTopSolution:
             # integral above; past K, 1/(1 - n cd² w) = 1/(1 - n) to O(k').  So p = slope·v (+ the
             # arctan on even quarters), p(K) = 0 by symmetry.
             return o.slope * J.v + np.where(odd, 0.0, atan_part)
-        r = np.where(odd, self._quarter.hi, 0.0) + J.v
         series = self._pi_series(o.n)
         if series is not None:
-            return series.periodic(r)[0]
-        # Carlson from sn, cn, dn of r: through a rounded am(r) the error would be amplified by
-        # 1/((1 - n sin²A) dn) ~ 1/√(1 - m) at the saddle passages near the separatrix.
+            return series.periodic(np.where(odd, self._quarter.hi, 0.0) + J.v)[0]
+        panels = self._pi_panels(o)
+        if panels is not None:
+            return panels(odd.astype(float), J.v)
+        r = np.where(odd, self._quarter.hi, 0.0) + J.v
+        # Near the separatrix the series declines (its coefficients fall like e^{-πδ/K}); p then comes
+        # from Chebyshev panels measured from the nearest quarter period, which keep it to ~1e-16
+        # where Π ≈ u/(1 - n) itself is as large as K.  Last resort, Carlson from sn, cn, dn of r
+        # (through a rounded am(r) the error would be amplified by 1/((1 - n sin²A) dn) ~ 1/√(1 - m)
+        # at the saddle passages), whose rounding is ulp(Π) ~ ulp(K).
         from ...special.integrals import pi_of_am
 
         return np.asarray(pi_of_am(o.n, r, self.m, m1=self.m1)) - o.pi_c_over_K * r
