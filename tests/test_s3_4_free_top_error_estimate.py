@@ -86,7 +86,8 @@ def _scaled(d: DD, factor: float) -> DD:
 PLANTS = {
     "precession angle at t = 0, φ'0 + 1e-9": lambda s, o: _planted_orientation(s, phi0=o.phi0 + 1e-9),
     "mean precession rate × (1 + 1e-10)": lambda s, o: _planted_orientation(s, nu=_scaled(o.nu, 1 + 1e-10)),
-    "precession constant c2/λ × (1 + 1e-8)": lambda s, o: _planted_orientation(s, c2_over_lam=o.c2_over_lam * (1 + 1e-8)),
+    "precession constant c2/λ × (1 + 1e-8)":
+        lambda s, o: _planted_orientation(s, c2_over_lam=o.c2_over_lam * (1 + 1e-8)),
     "Π(n; am u0 | m) + 1e-9": lambda s, o: _planted_orientation(s, p0=o.p0 + 1e-9),
     "L frame tilted by 1e-9": lambda s, o: _planted_orientation(s, S=rotation_matrix(1e-9, 0.0, 0.0) @ o.S),
     "parameter m + 1e-8": lambda s, o: _fresh(s, m=s.m + 1e-8, m1=s.m1 - 1e-8),

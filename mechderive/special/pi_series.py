@@ -53,7 +53,10 @@ class PiSeries:
         return self.mean.reshape(shape) * u + self.periodic(u)
 
     def periodic(self, u: np.ndarray) -> np.ndarray:
-        """Π(n_i; am u | m) - a₀u, the bounded 2K-periodic part (no cancellation against a₀u), shape (k, *u.shape)."""
+        """Π(n_i; am u | m) - a₀u, the bounded 2K-periodic part, shape (k, *u.shape).
+
+        Summed directly, so it does not lose ulp(a₀u) to cancellation as ``self(u) - a₀u`` would.
+        """
         u = np.asarray(u, dtype=float)
         theta = (np.pi / self.K) * u
         c2 = 2.0 * np.cos(theta)

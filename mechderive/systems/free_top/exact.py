@@ -293,20 +293,28 @@ class FreeTopSolution:
         return self._mp["pi_panels"]
 
     def _periodic_pi(self, J: _Jacobi, o: _Orientation) -> np.ndarray:
-        """p(u) = Π(n; am u | m) - (Π(n|m)/K) u, bounded and 2K-periodic, at u = q·K + v."""
+        """p(u) = Π(n; am u | m) - (Π(n|m)/K) u, bounded and 2K-periodic, at u = q·K + v.
+
+        Four regimes.  Separatrix and 1 - m < 1e-34: closed forms (below).  Otherwise the
+        motion's Fourier series of Π (special.pi_series), whose coefficients fall like
+        e^{-πδ/K} (δ the distance of the integrand's pole from the real axis); where it declines,
+        near the separatrix, Chebyshev panels measured from the nearest quarter period, which keep
+        p to ~1e-16 although Π ≈ u/(1 - n) is as large as K there.  Last resort, Carlson's R_J
+        from sn, cn, dn of r (not from a rounded am(r), which would amplify the error by
+        1/((1 - n sin²A) dn) ~ 1/√(1 - m) at the saddle passages), with rounding ulp(Π) ~ ulp(K).
+        """
         if o.n == 0:
             return np.zeros_like(J.v)
-        k = np.sqrt(-o.n)
-        atan_part = k * np.arctan(k * np.tanh(J.v)) / (1 - o.n)
-        if self._quarter is None:
-            # Separatrix (m = 1): Π(n; am u | 1) = [u + √-n arctan(√-n tanh u)]/(1 - n) (partial
-            # fractions, with atanh(tanh u) = u exactly), and Π(n|m)/K → 1/(1 - n).
-            return atan_part
         odd = np.mod(J.q, 2.0) == 1.0
-        if self._tiny:
-            # Piecewise separatrix motion: on an even quarter ∫₀^v dw/(1 - n tanh² w) is the separatrix
-            # integral above; past K, 1/(1 - n cd² w) = 1/(1 - n) to O(k').  So p = slope·v (+ the
-            # arctan on even quarters), p(K) = 0 by symmetry.
+        if self._quarter is None or self._tiny:
+            # Separatrix (m = 1): Π(n; am u | 1) = [u + √-n arctan(√-n tanh u)]/(1 - n) (partial
+            # fractions, with atanh(tanh u) = u exactly), and Π(n|m)/K → 1/(1 - n).  For 1 - m < 1e-34,
+            # piecewise separatrix motion: on an even quarter the same integral; past K,
+            # 1/(1 - n cd² w) = 1/(1 - n) to O(k').  So p = slope·v (+ the arctan on even quarters).
+            k = np.sqrt(-o.n)
+            atan_part = k * np.arctan(k * np.tanh(J.v)) / (1 - o.n)
+            if self._quarter is None:
+                return atan_part
             return o.slope * J.v + np.where(odd, 0.0, atan_part)
         series = self._pi_series(o.n)
         if series is not None:
@@ -314,14 +322,9 @@ class FreeTopSolution:
         panels = self._pi_panels(o)
         if panels is not None:
             return panels(odd.astype(float), J.v)
-        r = np.where(odd, self._quarter.hi, 0.0) + J.v
-        # Near the separatrix the series declines (its coefficients fall like e^{-πδ/K}); p then comes
-        # from Chebyshev panels measured from the nearest quarter period, which keep it to ~1e-16
-        # where Π ≈ u/(1 - n) itself is as large as K.  Last resort, Carlson from sn, cn, dn of r
-        # (through a rounded am(r) the error would be amplified by 1/((1 - n sin²A) dn) ~ 1/√(1 - m)
-        # at the saddle passages), whose rounding is ulp(Π) ~ ulp(K).
         from ...special.integrals import pi_of_am
 
+        r = np.where(odd, self._quarter.hi, 0.0) + J.v
         return np.asarray(pi_of_am(o.n, r, self.m, m1=self.m1)) - o.pi_c_over_K * r
 
     def _angles(self, t: np.ndarray, *, continuous: bool, keep: bool = True):
@@ -342,7 +345,8 @@ class FreeTopSolution:
         a, b, c = self._L_unit
         theta = np.arctan2(np.hypot(a * J.cn, b * J.sn), c * J.dn)
         a, b = self._ab_unit
-        # am(u) = q·π/2 + δ, δ = am(v) (even q) or atan(k' tan am v) (odd q): am(K + v) = π/2 + arctan(k' sd v / cd v·dn v)
+        # am(u) = q·π/2 + δ: δ = am(v) for even q, and for odd q, from sn(K + v) = cd v and
+        # cn(K + v) = -k' sd v, δ = atan2(k' sn v, cn v)
         qm = np.mod(J.q, 4.0)
         odd = (qm == 1.0) | (qm == 3.0)
         delta = np.where(odd, np.arctan2(_ldexp(J.s, self._kc), J.c), np.arctan2(J.s, J.c))
@@ -404,11 +408,26 @@ class FreeTopSolution:
     # --- the measured error ----------------------------------------------------------------------
 
     def error_estimate(self, t: Any, quantities: Sequence[str] = ("omega", "R")) -> float:
-        """A measured bound on the error of this motion at the times ``t``; see :mod:`._exact_estimate`.
+        """A bound on the error of :meth:`omega` / :meth:`rotation` at the times ``t``, measured on the run.
 
-        ``quantities``: any of ``"omega"`` (the estimate is then an error of ω relative to |ω|)
-        and ``"R"`` (absolute, in the entries of R, i.e. radians); the result is the largest
-        of the requested ones.  Asking only for ω evaluates nothing of the orientation.
+        Nothing in it is a constant: it is made of residuals at the very values output at ``t``
+        (re-used, not recomputed, when ``omega(t)`` / ``rotation(t)`` were called with the same
+        array), each converted to an error in the output — ω(0) - ω0 (as a phase error carried
+        over the orbit), Euler's equations (3.33) with the analytic derivative of the ansatz (a
+        rate error, times |t|max), conservation of 2T and L², the reduction period against an
+        independent K(m); for R also R(0) - R0, conservation of L in space, and the increments of
+        the precession angle φ' against Gauss–Legendre quadrature of the physical rate (3.58).
+        Details: :mod:`mechderive.systems.free_top._exact_estimate`.
+
+        ``quantities``: ``"omega"`` (then: error of ω relative to |ω0|) and/or ``"R"`` (absolute, in
+        the entries of R, i.e. radians; includes the ω part, from which R's angles come); the result
+        is the largest requested.  Asking only for ω evaluates nothing of the orientation.  Cost: the
+        residual arithmetic on the samples plus, for R, one evaluation of a few hundred extra phases.
+
+        >>> sol = exact_free_top((1.0, 2.0, 3.0), (1.0, 0.5, 1.0))
+        >>> t = np.linspace(0.0, 20.0, 201)
+        >>> bool(sol.error_estimate(t) < 1e-12)
+        True
         """
         from ._exact_estimate import error_estimate
 
@@ -444,6 +463,10 @@ def exact_free_top(moments: Any, omega0: Any, *, R0: Any = None) -> FreeTopSolut
     True
     >>> exact_free_top((2.0, 2.0, 3.0), (1.0, 0.0, 0.0)).kind   # tumbling end over end: steady
     'steady'
+
+    Every evaluation's error is measured by :meth:`FreeTopSolution.error_estimate`.  Refused with
+    a :class:`~mechderive.errors.MechDeriveError`: moments no body can have (3.22), a non-rotation
+    R0, non-finite input, and times beyond 2^50 turns or quarter periods of the motion.
     """
     I = check_principal_moments(*as_finite_array(moments, "moments", shape=(3,)))
     w0 = as_finite_array(omega0, "omega0", shape=(3,))
@@ -485,7 +508,8 @@ def _setup(I: np.ndarray, w0: np.ndarray, R0: np.ndarray) -> FreeTopSolution:
         kind=kind, m=float(e.m), m1=float(e.m1), polhode_period=T, _perm=e.perm,
         _amp=(float(e.P), float(e.Q), float(e.S)), _lam=DD.scaled(e.lam), _u0=DD.of(e.u0), _period=period,
         _I_rel=(float(Ix), float(Iy), float(Iz)), _quarter=quarter, _q0=e.q0, _v0=DD.of(e.v0), _kc=kc,
-        _tiny=bool(e.K is not None and e.m1 < setup.TINY_M1), _L_unit=L_unit, _ab_unit=ab_unit, _amp_scaled=amp_scaled, _t_max=_t_max(nu),
+        _tiny=bool(e.K is not None and e.m1 < setup.TINY_M1), _L_unit=L_unit, _ab_unit=ab_unit,
+        _amp_scaled=amp_scaled, _t_max=_t_max(nu),
         _mp=dict(constants=e, L=L_norm), **common)
 
 
