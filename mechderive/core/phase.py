@@ -43,17 +43,18 @@ class DD:
 
     @classmethod
     def scaled(cls, x) -> "DD":
-        """``x`` as (hi + lo)·2^exp with 1/2 ≤ |hi| < 1: any mpmath number, however small or large.
+        """``x`` as (hi + lo)·2^exp: exp = 0 in the double range's comfortable middle, 2^-500 ≤ |x| ≤ 2^500
+        (so hi + lo is the value, as for :meth:`of`), else chosen so that 1/2 ≤ |hi| < 1.
 
         >>> import mpmath
         >>> d = DD.scaled(mpmath.mpf("1e-310"))
-        >>> d.exp, 0.5 <= abs(d.hi) < 1
-        (-1029, True)
+        >>> d.exp, 0.5 <= abs(d.hi) < 1, DD.scaled(mpmath.mpf(3)).exp
+        (-1029, True, 0)
         """
         import mpmath
 
-        if x == 0:
-            return cls(0.0, 0.0, 0)
+        if x == 0 or mpmath.mpf(2) ** -500 <= abs(x) <= mpmath.mpf(2) ** 500:
+            return cls.of(x)
         _, e = mpmath.frexp(x)
         y = mpmath.ldexp(x, -int(e))
         hi = float(y)
