@@ -66,7 +66,8 @@ def error_estimate(sol: "FreeTopSolution", t: Any, quantities: Sequence[str]) ->
     if sol.kind == "steady":
         return _steady(sol, t) if want_R else 0.0
     J = sol._jacobi(t)
-    # the extra points, in one evaluation: t = 0 (unless sampled) and the precession check's
+    # the extra points, in one evaluation: t = 0 (unless it is a sample), and for R the ends and
+    # quadrature nodes of the precession check
     zero = np.flatnonzero(t.ravel() == 0.0)
     k = 0 if zero.size else 1
     probe = [np.zeros(k)]
@@ -88,7 +89,8 @@ def error_estimate(sol: "FreeTopSolution", t: Any, quantities: Sequence[str]) ->
 
 
 def _steady(sol: "FreeTopSolution", t: np.ndarray) -> float:
-    """ω is exact (the input); R = exp(hat(ω) t) R0: check R(0), and ω̃ = Rᵀω constant (Ṙ = hat(ω)R)."""
+    """ω is exact (the input, ω̇ = 0 decided exactly); R = exp(hat(ω) t) R0 with |ω|t reduced mod 2π in
+    double-double: check R(0) = R0 and that ω̃ = Rᵀω stays constant (Ṙ = hat(ω)R), plus R's rounding."""
     w = np.array(sol.omega0)
     R = sol.rotation(t)
     R_at_0 = sol._rotation(np.zeros(1), keep=False)[0]

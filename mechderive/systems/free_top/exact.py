@@ -60,7 +60,7 @@ import numpy as np
 
 from ...core.phase import DD, mod_two_pi, reduce_phase_nearest
 from ...core.validate import as_finite_array, check_rotation_matrix
-from ...errors import InvalidInputError
+from ...errors import InvalidInputError, UnphysicalInertiaError
 from ...inertia.validate import check_principal_moments
 from ...kinematics.rotations import continuous_euler_angles, euler_angles_from_matrix, rotation_matrix
 from ...kinematics.so3 import expm_so3
@@ -447,7 +447,7 @@ class FreeTopSolution:
         return (w_space @ self._S.T)[..., :2]
 
 
-def exact_free_top(moments: Any, omega0: Any, *, R0: Any = None) -> FreeTopSolution:
+def exact_free_top(moments: Any, omega0: Any, *, R0: Any = None, strict: bool = True) -> FreeTopSolution:
     """The exact motion of a free rigid body with principal moments ``moments``.
 
     Parameters
@@ -455,6 +455,10 @@ def exact_free_top(moments: Any, omega0: Any, *, R0: Any = None) -> FreeTopSolut
     moments : (I1, I2, I3), principal moments about the centre of mass (kg m²), any order.
     omega0 : body components of ω at t = 0 (rad/s), any finite floats (denormals included).
     R0 : the chapter's R at t = 0 (default identity: body axes along the space axes).
+    strict : keyword-only; True (default) refuses moments no body can have (the triangle
+        inequalities I1 + I2 ≥ I3 etc., (3.22)).  False waives them — the closed form needs only
+        positive moments — for published benchmarks such as (3, 3, 9); the moments must still be
+        positive.
 
     >>> sol = exact_free_top((1.0, 2.0, 3.0), (1.0, 0.5, 1.0))
     >>> sol.kind, round(sol.polhode_period, 6)
@@ -468,7 +472,12 @@ def exact_free_top(moments: Any, omega0: Any, *, R0: Any = None) -> FreeTopSolut
     a :class:`~mechderive.errors.MechDeriveError`: moments no body can have (3.22), a non-rotation
     R0, non-finite input, and times beyond 2^50 turns or quarter periods of the motion.
     """
-    I = check_principal_moments(*as_finite_array(moments, "moments", shape=(3,)))
+    I = as_finite_array(moments, "moments", shape=(3,))
+    if strict:
+        I = check_principal_moments(*I)
+    elif np.any(I <= 0):
+        raise UnphysicalInertiaError(f"expected principal moments > 0 (3.22) even with strict=False, got "
+                                     f"I{int(np.argmax(I <= 0)) + 1} = {float(I[I <= 0][0]):.6g}")
     w0 = as_finite_array(omega0, "omega0", shape=(3,))
     R0 = np.eye(3) if R0 is None else check_rotation_matrix(R0, "R0")
     with mpmath.workdps(setup.DPS):
