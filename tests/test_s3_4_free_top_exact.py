@@ -168,9 +168,10 @@ def test_asking_for_omega_does_not_derive_or_evaluate_the_orientation():
     assert "precession_partial_fractions" in second and second.endswith("True")
 
 
-def test_rotation_by_fourier_series_equals_rotation_by_carlson(monkeypatch):
-    # φ' of the L frame takes Π(n; am u | m): the usual path sums its Fourier series, the fallback
-    # Carlson's R_J.  Over 100 polhode periods the two R agree to rounding.
+def test_rotation_by_fourier_series_equals_rotation_by_panels_and_by_carlson(monkeypatch):
+    # φ' of the L frame takes the bounded part of Π(n; am u | m): the usual path sums its Fourier
+    # series, near the separatrix Chebyshev panels from the quarter periods, the last resort
+    # Carlson's R_J.  Over 100 polhode periods the three R agree to rounding.
     import mechderive.special.pi_series as pi_series
     from mechderive.systems.free_top.exact import exact_free_top
 
@@ -179,7 +180,12 @@ def test_rotation_by_fourier_series_equals_rotation_by_carlson(monkeypatch):
     fast = sol.rotation(t)
     assert sol._mp["pi_series"] is not None
     monkeypatch.setattr(pi_series, "fit_pi_series", lambda *a, **k: None)
+    by_panels = exact_free_top([1.0, 2.0, 3.0], [1.0, 0.5, 1.0])
+    panels = by_panels.rotation(t)
+    assert by_panels._mp["pi_series"] is None and by_panels._mp["pi_panels"] is not None
+    monkeypatch.setattr(pi_series, "fit_pi_panels", lambda *a, **k: None)
     slow = exact_free_top([1.0, 2.0, 3.0], [1.0, 0.5, 1.0])
     carlson = slow.rotation(t)
-    assert slow._mp["pi_series"] is None
+    assert slow._mp["pi_panels"] is None
     np.testing.assert_allclose(fast, carlson, rtol=0, atol=1e-14)
+    np.testing.assert_allclose(fast, panels, rtol=0, atol=1e-14)
