@@ -168,9 +168,10 @@ def test_asking_for_omega_does_not_derive_or_evaluate_the_orientation():
     assert "precession_partial_fractions" in second and second.endswith("True")
 
 
-def test_rotation_by_fourier_series_equals_rotation_by_carlson(monkeypatch):
-    # φ' of the L frame takes Π(n; am u | m): the usual path sums its Fourier series, the fallback
-    # Carlson's R_J.  Over 100 polhode periods the two R agree to rounding.
+def test_rotation_by_fourier_series_equals_rotation_by_panels_and_by_carlson(monkeypatch):
+    # φ' of the L frame takes the bounded part of Π(n; am u | m): the usual path sums its Fourier
+    # series, near the separatrix Chebyshev panels from the quarter periods, the last resort
+    # Carlson's R_J.  Over 100 polhode periods the three R agree to rounding.
     import mechderive.special.pi_series as pi_series
     from mechderive.systems.free_top.exact import exact_free_top
 
@@ -179,7 +180,53 @@ def test_rotation_by_fourier_series_equals_rotation_by_carlson(monkeypatch):
     fast = sol.rotation(t)
     assert sol._mp["pi_series"] is not None
     monkeypatch.setattr(pi_series, "fit_pi_series", lambda *a, **k: None)
+    by_panels = exact_free_top([1.0, 2.0, 3.0], [1.0, 0.5, 1.0])
+    panels = by_panels.rotation(t)
+    assert by_panels._mp["pi_series"] is None and by_panels._mp["pi_panels"] is not None
+    monkeypatch.setattr(pi_series, "fit_pi_panels", lambda *a, **k: None)
     slow = exact_free_top([1.0, 2.0, 3.0], [1.0, 0.5, 1.0])
     carlson = slow.rotation(t)
-    assert slow._mp["pi_series"] is None
+    assert slow._mp["pi_panels"] is None
     np.testing.assert_allclose(fast, carlson, rtol=0, atol=1e-14)
+    np.testing.assert_allclose(fast, panels, rtol=0, atol=1e-14)
+
+
+# --- (3.54) Euler angles of the closed form: continued along the motion, not unwrapped from samples ---
+
+@pytest.mark.parametrize("I, w0, R0_angles", [
+    ((1.0, 1e3, 1e3), (1.0, 0.5, 1.0), None),          # issue 11: a rod, R0 = 1 (a start on the pole)
+    ((1.0, 2.0, 3.0), (1.0, 0.5, 1.0), (0.3, 0.7, -1.1)),
+    ((2.0, 3.0, 5.0), (0.3, 1.0, 0.2), (0.3, np.pi, -1.1)),  # a start at the bottom, θ = π
+])
+def test_euler_angles_at_coarse_sampling_match_an_integration(I, w0, R0_angles):
+    from mechderive.kinematics.euler import rotation_matrix
+    from mechderive.systems.free_top.integrate import integrate_free_top
+
+    R0 = None if R0_angles is None else rotation_matrix(*R0_angles)
+    t = np.array([0.0, 37.0, 100.0])  # tens of turns between samples: unwrapping them would alias
+    sol = exact_free_top(I, w0, R0=R0)
+    ang = sol.euler_angles(t)
+    est = sol.error_estimate(t, ("euler_angles",))
+    # independent reference: DOP853 on ω + quaternion, its angles counted along its own steps
+    run = integrate_free_top(I, w0, t, R0=R0, method="DOP853", rtol=1e-12, atol=1e-15)
+    # both are continuations of R0's angles; at a pole start only φ ± ψ is fixed by R0, so compare φ ± ψ
+    # there, and everything elsewhere; the two estimates together bound the difference
+    diff = ang - run.euler_angles
+    if R0_angles is None or R0_angles[1] in (0.0, np.pi):
+        diff = np.stack([diff[:, 0] + diff[:, 2], diff[:, 1], diff[:, 0] - diff[:, 2]], axis=-1)
+        diff[:, 2 if R0_angles is None else 0] = 0.0  # the combination R0 leaves open
+    assert np.max(np.abs(diff)) <= est + run.euler_angle_error_estimate
+    assert est < 1e-10  # and the estimate is useful: no pole passage in these runs
+    np.testing.assert_allclose(rotation_matrix(*ang.T), sol.rotation(t), atol=1e-12)
+    # the same angles however the motion is sampled
+    fine = exact_free_top(I, w0, R0=R0).euler_angles(np.linspace(0.0, 100.0, 20001))
+    np.testing.assert_array_equal(ang, fine[[0, 7400, -1]])
+
+
+def test_euler_angle_estimate_says_when_a_pole_passage_leaves_the_turns_open():
+    # tumbling end over end from R0 = 1: θ runs through 0 and π every half turn, where only φ ± ψ is
+    # defined; the estimate must say 2π per passage rather than a rounding-level figure
+    sol = exact_free_top((2.0, 2.0, 3.0), (1.0, 0.0, 0.0))
+    t = np.linspace(0.0, 20.0, 5)
+    sol.euler_angles(t)
+    assert sol.error_estimate(t, ("euler_angles",)) >= 2 * np.pi

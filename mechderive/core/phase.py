@@ -18,15 +18,20 @@ import numpy as np
 
 from ..special._doubledouble import PI_HI, PI_LO, dd_add, two_prod
 
-__all__ = ["DD", "reduce_phase", "mod_two_pi"]
+__all__ = ["DD", "reduce_phase", "reduce_phase_nearest", "mod_two_pi"]
 
 
 @dataclass(frozen=True)
 class DD:
-    """A double-double constant hi + lo (|lo| ≤ ulp(hi)/2), ~32 significant digits."""
+    """A double-double constant (hi + lo)·2^exp (|lo| ≤ ulp(hi)/2), ~32 significant digits.
+
+    ``exp`` is 0 except for rates built by :meth:`scaled`, whose size may lie outside the range
+    where hi and lo are both normal floats (a rate of 1e-310 rad/s has no low word at all).
+    """
 
     hi: float
     lo: float
+    exp: int = 0
 
     @classmethod
     def of(cls, x) -> "DD":
@@ -35,6 +40,34 @@ class DD:
 
         hi = float(x)
         return cls(hi, float(x - mpmath.mpf(hi)))
+
+    @classmethod
+    def scaled(cls, x) -> "DD":
+        """``x`` as (hi + lo)·2^exp: exp = 0 in the double range's comfortable middle, 2^-500 ≤ |x| ≤ 2^500
+        (so hi + lo is the value, as for :meth:`of`), else chosen so that 1/2 ≤ |hi| < 1.
+
+        >>> import mpmath
+        >>> d = DD.scaled(mpmath.mpf("1e-310"))
+        >>> d.exp, 0.5 <= abs(d.hi) < 1, DD.scaled(mpmath.mpf(3)).exp
+        (-1029, True, 0)
+        """
+        import mpmath
+
+        if x == 0 or mpmath.mpf(2) ** -500 <= abs(x) <= mpmath.mpf(2) ** 500:
+            return cls.of(x)
+        _, e = mpmath.frexp(x)
+        y = mpmath.ldexp(x, -int(e))
+        hi = float(y)
+        return cls(hi, float(y - mpmath.mpf(hi)), int(e))
+
+
+def _times(rate: DD, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """rate·t in double-double (TwoProduct), rescaled by 2^exp: exact but for the low word's rounding."""
+    hi, lo = two_prod(rate.hi, t)
+    lo = lo + rate.lo * t
+    if rate.exp:
+        hi, lo = np.ldexp(hi, rate.exp), np.ldexp(lo, rate.exp)
+    return hi, lo
 
 
 def reduce_phase(rate: DD, offset: DD, period: DD | None, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -46,8 +79,7 @@ def reduce_phase(rate: DD, offset: DD, period: DD | None, t: np.ndarray) -> tupl
     >>> int(j[0]), float(r[0])
     (5, 0.5)
     """
-    hi, lo = two_prod(rate.hi, t)
-    lo = lo + rate.lo * t
+    hi, lo = _times(rate, t)
     hi, lo = dd_add(hi, lo, offset.hi, offset.lo)
     if period is None:
         return np.zeros_like(t), hi + lo
@@ -64,15 +96,39 @@ def reduce_phase(rate: DD, offset: DD, period: DD | None, t: np.ndarray) -> tupl
     return j, r
 
 
+def reduce_phase_nearest(rate: DD, offset: DD, quarter: DD | None,
+                         t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(q, v, v_lo) with rate·t + offset = q·quarter + v + v_lo, q integer, |v| ≤ quarter/2 (to rounding).
+
+    The remainder is formed in double-double and returned as such (|v_lo| ≤ ulp(v)/2), so v
+    keeps its *relative* accuracy however close the phase is to a multiple of the quarter
+    period: the point of reducing to the nearest multiple is that a Jacobi function vanishing
+    there (sn at 0 and 2K, cn at K and 3K) is then evaluated from a small, accurate argument;
+    v_lo lets functions like e^v be corrected for the rounding of a large v.  With ``quarter``
+    None (an aperiodic motion) q = 0 and v + v_lo is the phase.
+
+    >>> q, v, v_lo = reduce_phase_nearest(DD(1.0, 0.0), DD(0.5, 0.0), DD(2.0, 0.0), np.array([10.0]))
+    >>> int(q[0]), float(v[0]), float(v_lo[0])
+    (5, 0.5, 0.0)
+    """
+    hi, lo = _times(rate, t)
+    hi, lo = dd_add(hi, lo, offset.hi, offset.lo)
+    if quarter is None:
+        return np.zeros_like(hi), hi, lo
+    q = np.rint(hi / quarter.hi)
+    ph, pl = two_prod(q, quarter.hi)  # exact: q is an integer below 2**53
+    pl = pl + q * quarter.lo
+    rh, rl = dd_add(hi, lo, -ph, -pl)
+    return q, rh, rl
+
+
 def mod_two_pi(rate: DD | float, x: np.ndarray) -> np.ndarray:
     """(rate·x) modulo 2π, in (-π, π] up to rounding, formed in double-double.
 
     >>> round(float(mod_two_pi(DD(1.0, 0.0), np.array(7.0))), 15)   # 7 - 2π
     0.716814692820414
     """
-    hi_r, lo_r = (rate.hi, rate.lo) if isinstance(rate, DD) else (float(rate), 0.0)
-    ph, pl = two_prod(hi_r, x)
-    pl = pl + lo_r * x
+    ph, pl = _times(rate if isinstance(rate, DD) else DD(float(rate), 0.0), x)
     k = np.round(ph / (2 * PI_HI))
     kh, kl = two_prod(k, 2 * PI_HI)
     kl = kl + k * 2 * PI_LO

@@ -353,12 +353,15 @@ def _free_exact(scene: Scene, t: np.ndarray) -> tuple[dict, dict, Any]:
     sol = exact_free_top(moments, w0, R0=R0, strict=scene.strict)
     cols = _free_columns(scene.quantities, lambda: sol.omega(t), lambda: sol.rotation(t),
                          lambda: sol.euler_angles(t), lambda: sol.quaternion(t), moments)
-    estimate = _closed_form_estimate(  # MERGE: error_estimate (the fallback: the pre-measurement constant)
-        sol, t, _free_needs(scene.quantities), lambda: 1e-13 * max(1.0, float(np.linalg.norm(w0))))
+    # measured on this run, at the very values output (FreeTopSolution.error_estimate): ω relative to
+    # |ω|, R and q in their entries, the Euler angles in rad
+    estimate = float(sol.error_estimate(t, sorted({_FREE_EXACT_ESTIMATES[k] for k in _free_needs(scene.quantities)})))
     info = {"error_estimate": estimate, "kind": sol.kind, "polhode_period": sol.polhode_period, "m": sol.m}
     return cols, info, sol
 
 
+#: The closed form's estimate (FreeTopSolution.error_estimate) that covers each output family.
+_FREE_EXACT_ESTIMATES = {"omega": "omega", "rotation": "R", "quaternion": "R", "euler_angles": "euler_angles"}
 #: The integrated free top's estimate that covers each output family of :func:`_free_needs`.
 _FREE_ESTIMATES = {"omega": "omega_error_estimate", "rotation": "rotation_error_estimate",
                    "quaternion": "rotation_error_estimate", "euler_angles": "euler_angle_error_estimate"}

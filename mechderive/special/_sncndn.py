@@ -21,6 +21,8 @@ ulp *relative* error:
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from ..errors import InvalidInputError
@@ -136,7 +138,27 @@ def _cn_dn_sech_series(v_hi, v_lo, K_hi, g_hi, g_lo, k, n_terms):
 
 
 def _per_parameter(p: Parameter) -> dict:
-    """Everything that depends on m only, computed on the parameter's own shape."""
+    """Everything that depends on m only, computed on the parameter's own shape.
+
+    A scalar parameter (one motion evaluated at many times, in many calls) is computed once.
+    """
+    if np.ndim(p.m) == 0 and np.ndim(p.m1) == 0:
+        return _per_scalar_parameter(float(p.m), float(p.m1), float(p.m1_lo), float(p.K_hi), float(p.K_lo))
+    return _per_parameter_arrays(p)
+
+
+@functools.lru_cache(maxsize=64)
+def _per_scalar_parameter(m: float, m1: float, m1_lo: float, K_hi: float, K_lo: float) -> dict:
+    out = _per_parameter_arrays(Parameter(*(np.asarray(x) for x in (m, m1, m1_lo, K_hi, K_lo))))
+    for value in out.values():  # shared between calls: read-only
+        for arr in (value if isinstance(value, (tuple, list)) else (value,)):
+            for a in (arr if isinstance(arr, (tuple, list)) else (arr,)):
+                if isinstance(a, np.ndarray):
+                    a.flags.writeable = False
+    return out
+
+
+def _per_parameter_arrays(p: Parameter) -> dict:
     one = p.m1 == 0.0
     K_hi = np.where(one, 1.0, p.K_hi)     # placeholder where K = inf (m = 1 handled apart)
     K_lo = np.where(one, 0.0, p.K_lo)

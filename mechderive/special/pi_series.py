@@ -49,6 +49,15 @@ class PiSeries:
     def __call__(self, u: np.ndarray) -> np.ndarray:
         """Π(n_i; am u | m) at u (any shape): shape (k, *u.shape)."""
         u = np.asarray(u, dtype=float)
+        shape = (len(self.n),) + (1,) * u.ndim
+        return self.mean.reshape(shape) * u + self.periodic(u)
+
+    def periodic(self, u: np.ndarray) -> np.ndarray:
+        """Π(n_i; am u | m) - a₀u, the bounded 2K-periodic part, shape (k, *u.shape).
+
+        Summed directly, so it does not lose ulp(a₀u) to cancellation as ``self(u) - a₀u`` would.
+        """
+        u = np.asarray(u, dtype=float)
         theta = (np.pi / self.K) * u
         c2 = 2.0 * np.cos(theta)
         # Clenshaw for Σ_{k=1}^{N} s_k sin(kθ): y_k = s_k + 2cos θ y_{k+1} - y_{k+2}, sum = y_1 sin θ
@@ -57,7 +66,7 @@ class PiSeries:
         y2 = np.zeros_like(y1)
         for k in range(self.sine.shape[1] - 1, -1, -1):
             y1, y2 = self.sine[:, k].reshape(shape) + c2 * y1 - y2, y1
-        return self.mean.reshape(shape) * u + y1 * np.sin(theta)
+        return y1 * np.sin(theta)
 
 
 def fit_pi_series(n: np.ndarray, sn_squared, K: float) -> PiSeries | None:
@@ -93,3 +102,80 @@ def fit_pi_series_for_motion(n: np.ndarray, m: float, m1: float, K: float) -> Pi
     from .jacobi import jacobi_sn_cn_dn
 
     return fit_pi_series(n, lambda u: jacobi_sn_cn_dn(u, m, m1=m1)[0] ** 2, K)
+
+
+#: Chebyshev degree per panel, and panel width as a fraction of the distance δ of the integrand's
+#: nearest pole: with h = δ/2 the Bernstein ellipse through the pole has ρ = 4 + √17 ≈ 8.1, and
+#: ρ^-18 ≈ 4e-17.
+_PANEL_DEGREE = 18
+_PANEL_WIDTH = 0.5
+#: panels beyond this count (a pole very near the real axis) are not worth their setup
+_MAX_PANELS = 4000
+
+
+@dataclass(frozen=True)
+class PiPanels:
+    """p(u) = Π(n; am u | m) - (Π(n|m)/K) u, the bounded part of Π, by panels from the quarter periods.
+
+    p is odd about 0 and about K and vanishes at every multiple of K, so two functions on
+    [0, K/2] give it everywhere: p₀(y) = p(y) and p₁(y) = p(K - y), each ∫₀^y of a bounded
+    integrand, 1/(1 - n sn² s) - Π(n|m)/K and (with a minus sign) 1/(1 - n cd² s) - Π(n|m)/K
+    (sn(K - s) = cd s), tabulated as piecewise Chebyshev interpolants integrated exactly.  At
+    u = e·K + v (e = 0, 1 the parity of the nearest quarter period, |v| ≤ K/2)
+    p = sign(v)·p₀(|v|) or -sign(v)·p₁(|v|).  Unlike Π itself (≈ u/(1 - n), as large as K near
+    the separatrix) nothing here is large, so p keeps an absolute accuracy of ~1e-16.
+    """
+
+    width: float
+    coef: np.ndarray  # (2, panels, degree + 2): p₀ and p₁ on each panel, in x ∈ [-1, 1]
+
+    def __call__(self, e: np.ndarray, v: np.ndarray) -> np.ndarray:
+        y = np.abs(v)
+        k = np.minimum((y / self.width).astype(int), self.coef.shape[1] - 1)
+        x = 2.0 * (y - k * self.width) / self.width - 1.0
+        c = self.coef[np.asarray(e, dtype=int), k]  # (..., degree + 2)
+        b1 = np.zeros_like(x)
+        b2 = np.zeros_like(x)
+        for j in range(c.shape[-1] - 1, 0, -1):  # Clenshaw for Σ c_j T_j(x)
+            b1, b2 = c[..., j] + 2.0 * x * b1 - b2, b1
+        value = c[..., 0] + x * b1 - b2
+        return np.sign(v) * np.where(np.asarray(e) == 1, -value, value)
+
+
+def fit_pi_panels(n: float, m: float, m1: float, K: float, pi_c_over_K: float) -> PiPanels | None:
+    """:class:`PiPanels` for characteristic n ≤ 0 (or None if too many panels would be needed).
+
+    ``pi_c_over_K`` is Π(n|m)/K, known to more digits than a double evaluation would give.  The
+    two cumulative integrals must meet at K/2 (p₀(K/2) = p₁(K/2)): a built-in check of the fit;
+    None if they do not agree to 1e-14.
+    """
+    from numpy.polynomial import chebyshev as C
+
+    from .jacobi import jacobi_sn_cn_dn
+
+    delta = np.arctan(1.0 / np.sqrt(-n)) if n < 0 else np.pi / 2  # nearest pole: sn² = 1/n
+    width = _PANEL_WIDTH * min(delta, np.pi / 2)
+    panels = int(np.ceil(0.5 * K / width))
+    if panels > _MAX_PANELS:
+        return None
+    x = C.chebpts1(_PANEL_DEGREE + 1)
+    starts = width * np.arange(panels)
+    s = (starts[:, None] + 0.5 * width * (x[None, :] + 1.0)).ravel()
+    sn, cn, dn = (np.asarray(f) for f in jacobi_sn_cn_dn(s, m, m1=m1))
+    g = np.stack([1.0 / (1.0 - n * sn**2), 1.0 / (1.0 - n * (cn / dn) ** 2)]) - pi_c_over_K
+    g = g.reshape(2, panels, _PANEL_DEGREE + 1)
+    V = C.chebvander(x, _PANEL_DEGREE)
+    c = g @ V * (2.0 / (_PANEL_DEGREE + 1))  # discrete orthogonality at the first-kind points
+    c[..., 0] *= 0.5
+    integral = C.chebint(c, lbnd=-1, scl=0.5 * width, axis=-1)  # ∫ from the panel's start
+    whole = C.chebval(1.0, np.moveaxis(integral, -1, 0))  # each panel's integral, (2, panels)
+    before = np.concatenate([np.zeros((2, 1)), np.cumsum(whole, axis=1)[:, :-1]], axis=1)
+    integral[..., 0] += before
+    integral[1] *= -1.0  # p₁(y) = p(K - y) = -∫₀^y (1/(1 - n cd² s) - Π/K) ds
+    coef = integral
+    half = 0.5 * K
+    ends = PiPanels(width, coef)
+    p0, p1 = (float(ends(np.array(e), np.array(half))) for e in (0, 1))
+    if abs(p0 + p1) > 1e-14:  # p₀(K/2) = p(K/2) and -p₁(K/2) evaluates as -p(K/2) through __call__
+        return None
+    return ends

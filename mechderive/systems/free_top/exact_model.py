@@ -37,10 +37,12 @@ from ...errors import DerivationError
 from ...kinematics import euler
 from . import model as free_top_model
 
-__all__ = ["FreeTopExactModel", "model", "Ix", "Iy", "Iz", "E2", "L2", "L"]
+__all__ = ["FreeTopExactModel", "model", "Ix", "Iy", "Iz", "E2", "L2", "L", "gaps"]
 
 Ix, Iy, Iz = sp.symbols("I_x I_y I_z", positive=True)
 E2, L2, L = sp.symbols("E2 L2 L", positive=True)  # 2T, L², |L|
+#: G_k = 2T·I_k - L² = Σ_a I_a ω_a² (I_k - I_a) for k = x, y, z: the "gaps" every constant factors into
+gaps = sp.symbols("G_x G_y G_z", real=True)
 _P, _Q, _S, _lam, _m = sp.symbols("P Q S lambda m", real=True)
 _sn, _cn, _dn = sp.symbols("sn cn dn", real=True)
 
@@ -118,6 +120,46 @@ class FreeTopExactModel(SymbolicModel):
         for name, expr in relations.items():
             if sp.cancel(sp.together(expr)) != 0:
                 raise DerivationError(f"elliptic ansatz fails {name}")
+
+    @derived
+    def gap_constants(self) -> dict[str, sp.Expr]:
+        """P², S², λ², Q², m and 1 - m as functions of I_x, I_y, I_z and the gaps G_k = 2T·I_k - L².
+
+        Each constant of :attr:`constants` factors into moments, moment differences and
+        factors linear in 2T and L²; every such factor is α·2T + β·L² = -β·G_k with
+        I_k = -α/β, and is replaced by -β·G_k.  The point is numerical: G_k = Σ_a I_a ω_a² (I_k - I_a)
+        is an exact sum of products of the (binary) inputs, so it can be formed without the
+        cancellation of 2T·I_k - L² (which loses everything near a principal axis and
+        decides the separatrix, G_y = 0).  Checked: substituting G_k back gives the constants.
+        """
+        out = {}
+        moments = {Ix: gaps[0], Iy: gaps[1], Iz: gaps[2]}
+
+        def replace_factor(f: sp.Expr) -> sp.Expr:
+            if not f.free_symbols & {E2, L2}:
+                return f
+            poly = sp.Poly(f, E2, L2)
+            if poly.total_degree() != 1 or poly.coeff_monomial(1) != 0:
+                raise DerivationError(f"expected a factor linear and homogeneous in 2T and L², got {f}")
+            alpha, beta = poly.coeff_monomial(E2), poly.coeff_monomial(L2)
+            moment = sp.cancel(-alpha / beta)
+            if moment not in moments:
+                raise DerivationError(f"expected a factor 2T·I_k - L², got {f}")
+            return -beta * moments[moment]
+
+        def replace_factors(product: sp.Expr) -> sp.Expr:
+            return sp.Mul(*[replace_factor(base) ** e for base, e in
+                            (arg.as_base_exp() for arg in sp.Mul.make_args(product))])
+
+        for name in ("P2", "S2", "lambda2", "Q2", "m", "m1"):
+            expr = self.constants[name]
+            num, den = sp.fraction(sp.factor(expr))
+            new = replace_factors(num) / replace_factors(den)
+            back = new.subs({gaps[0]: E2 * Ix - L2, gaps[1]: E2 * Iy - L2, gaps[2]: E2 * Iz - L2})
+            if sp.cancel(back - expr) != 0:
+                raise DerivationError(f"gap form of {name} does not reproduce it: {new}")
+            out[name] = new
+        return out
 
     @derived
     def precession_rate(self) -> sp.Expr:
