@@ -49,8 +49,8 @@ from ...core.validate import as_finite_array
 from ...errors import DerivationError, InvalidInputError
 from ...core.codecache import cached_lambdify
 from ...kinematics.rotations import angular_velocity_body, rotation_matrix
-from ...core.phase import DD, mod_two_pi, reduce_phase
-from ...special._doubledouble import dd_add
+from ...core.phase import DD, mod_two_pi
+from ...special._doubledouble import dd_add, two_prod
 from ...special.highprec import complete_pi_mp
 from .parameters import check_initial, check_params
 
@@ -80,10 +80,16 @@ def _nutation_functions():
         nut = em.model().nutation_constants
         return [hm.beta, em.u1, em.u2, em.u3], [nut["kappa2"], nut["m"], nut["m1"]]
 
+    def build_gaps():
+        from . import model as hm
+
+        return [*hm.PARAMETERS, *hm.STATE], list(hm.model().passage_factors)
+
     state, _ = cached_lambdify("heavy_top.constants_from_state", build_state, module="mpmath")
+    gaps, _ = cached_lambdify("heavy_top.passage_factors", build_gaps, module="mpmath")
     cubic, _ = cached_lambdify("heavy_top.f_coefficients", build_f, module="mpmath")
     nutation, _ = cached_lambdify("heavy_top.nutation_constants", build_nutation, module="mpmath")
-    return {"state": state, "f": cubic, "nutation": nutation}
+    return {"state": state, "f": cubic, "nutation": nutation, "gaps": gaps}
 
 
 @functools.cache
@@ -165,21 +171,78 @@ class _Pass:
         return self._cache[key]
 
     def phase(self):
-        return self._get("phase", lambda: self.sol._phase(self.t))
+        """(j, r): v = j·2K + r, r in [0, 2K) (r rounded to a double)."""
+        return self.phase_dd()[:2]
+
+    def phase_dd(self):
+        """(j, r_hi, r_lo): the reduced phase as a double-double."""
+        return self._get("phase", lambda: self.sol._phase_dd(self.t))
 
     def jacobi(self):
         """sn, cn, dn of the reduced phase r."""
         return self.reduced_jacobi()[:3]
 
     def reduced_jacobi(self):
-        """sn, cn, dn and the half-period count of r, shared by θ (sn, cn) and Π."""
+        """sn, cn, dn of r and the half-period count j' of r = j'·2K + r', |r'| <= K, shared by θ and Π.
+
+        Each to a few ulp *relative*, also next to the turning points: sn, cn, dn are taken at the
+        distance δ of r from the nearest of 0, K, 2K (:meth:`turning`), with DLMF 22.4.iii:
+        sn(K + δ) = cd δ, cn(K + δ) = -k' sd δ, dn(K + δ) = k' nd δ; sn(2K + δ) = -sn δ,
+        cn(2K + δ) = -cn δ.  Next to the pole u2 ≈ 1, 1 - u = (1 - u2) + (u2 - u1) cn² then keeps
+        its digits; from r rounded to a double, cn near K would carry an absolute error ulp(K) — a
+        relative error 1e-16/|cn| in cn, and in φ̇, ψ̇ ∝ 1/(1 - u) (at θ0 = 1e-16 φ̇(0) came out
+        0.75 rad/s off).
+        """
         from ...special._parameter import parameter
         from ...special._sncndn import reduced_sn_cn_dn
 
         def make():
-            r = np.asarray(self.phase()[1], dtype=float)
-            return reduced_sn_cn_dn(r, parameter(self.sol.m, self.sol.m1))[:4]
+            p = parameter(self.sol.m, self.sol.m1)
+            if self.sol._period is None:  # m = 1: no period, r is the phase itself
+                _, rh, rl = self.phase_dd()
+                return reduced_sn_cn_dn(np.asarray(rh + rl, dtype=float), p)[:4]
+            kind, xh, xl = self.turning()
+            sx, cx, dx = reduced_sn_cn_dn(xh + xl, p)[:3]
+            kc = np.sqrt(p.m1 + p.m1_lo)
+            at0, atK = kind == 0, kind == 1
+            sn = np.where(at0, sx, np.where(atK, cx / dx, -sx))
+            cn = np.where(at0, cx, np.where(atK, -kc * sx / dx, -cx))
+            dn = np.where(at0, dx, np.where(atK, kc / dx, dx))
+            past_K = (kind == 2) | (atK & ((xh > 0) | ((xh == 0) & (xl > 0))))  # r = 2K + r', r' in (-K, 0]
+            return sn, cn, dn, past_K.astype(float)
         return self._get("jacobi", make)
+
+    def turning(self):
+        """(kind, x_hi, x_lo): r = kind·K + x with kind 0, 1, 2 the nearest of 0, K, 2K, x in double-double.
+
+        From the double-double phase, x is known to ~1e-32·|v| absolutely.  Near the start that is
+        not enough when θ0 is within ~1e-30 of a turning point (1 - u0 ~ 1e-60 next to the pole):
+        there x comes from w = κt + δ0, δ0 = v0 - (the turning point next to v0) computed at the
+        setup's precision with its full relative accuracy, so that x(0) = δ0 (and θ̇(0), φ̇(0)
+        are reproduced); the two agree to ~1e-32 wherever both apply.
+        """
+        def make():
+            sol = self.sol
+            j, rh, rl = self.phase_dd()
+            per = sol._period
+            Kh, Kl = 0.5 * per.hi, 0.5 * per.lo
+            kind = np.where(rh <= 0.5 * Kh, 0, np.where(rh >= 1.5 * Kh, 2, 1))
+            xh, xl = dd_add(rh, rl, -kind * Kh, -kind * Kl)
+            anchor, dv0 = sol._mp.get("anchor"), sol._mp.get("dv0")
+            if anchor is not None:
+                k = sol._kappa
+                wh, wl = two_prod(k.hi, self.t)
+                wl = wl + k.lo * self.t
+                wh, wl = dd_add(wh, wl, dv0.hi, dv0.lo)
+                small = np.abs(wh) <= 0.25 * Kh
+                w_kind = np.full(np.shape(wh), 1) if anchor else np.where((wh > 0) | ((wh == 0) & (wl >= 0)), 0, 2)
+                kind = np.where(small, w_kind, kind)
+                xh, xl = np.where(small, wh, xh), np.where(small, wl, xl)
+            return kind, xh, xl
+        # part of the Jacobi step (not listed in ``computed`` on its own)
+        if "turning" not in self._cache:
+            self._cache["turning"] = make()
+        return self._cache["turning"]
 
     def amplitude(self):
         from ...special.jacobi import jacobi_am
@@ -236,14 +299,19 @@ class _Pass:
         """
         from ...special._carlson import elliprj
 
-        sn, cn, dn = self.jacobi()
-        r = self.phase()[1]
-        K = self.sol._period.hi / 2
+        sn, cn, dn, past = self.reduced_jacobi()
+        kind, xh, xl = self.turning()
+        per = self.sol._period
+        K = per.hi / 2
         sn3 = np.abs(sn) ** 3
+        # which side of K, and r or 2K - r, from r = kind·K + x: within ulp(K) of the passage a
+        # rounded r would pick the wrong branch (an error of the whole jump 2Π(n), ~π in φ)
+        r_hi, r_lo = dd_add(kind * K, kind * 0.5 * per.lo, xh, xl)
+        rest_hi, rest_lo = dd_add(per.hi, per.lo, -r_hi, -r_lo)
         with np.errstate(all="ignore"):
             half = n / 3 * sn3 * elliprj(cn * cn, dn * dn, 1.0, cn * cn + n1 * sn * sn)
             complete = K + n / 3 * float(elliprj(0.0, self.sol.m1, 1.0, n1))
-        return np.where(r <= K, r + half, 2 * complete - ((2 * K - r) + half))
+        return np.where(past == 0, (r_hi + r_lo) + half, 2 * complete - ((rest_hi + rest_lo) + half))
 
     def half_theta(self):
         """(sin θ/2, cos θ/2) up to a common positive factor, *signed* through exact passages.
@@ -273,12 +341,14 @@ class _Pass:
                 return np.zeros(self.t.shape)
             j, r = self.phase()
             half = sol._period.hi / 2  # K: the pole at v = K (mod 2K), the bottom at v = 0 (mod 2K)
-            r0 = sol._mp["v0_reduced"]
+            # the phase at t = 0 by the same arithmetic: v0 = F(A0|m) lies in [-K, K], so its period
+            # count j0 is -1 when the start is just before a bottom passage (v0 < 0)
+            j0, r0 = (float(x[0]) for x in sol._phase(np.zeros(1)))
             count = np.zeros(self.t.shape)
             if sol._one_minus_u2 == 0.0:
-                count = count + j + (r >= half) - (r0 >= half)
+                count = count + (j + (r >= half)) - (j0 + (r0 >= half))
             if sol._one_plus_u1 == 0.0:
-                count = count + j + (r > 0) - (r0 > 0)
+                count = count + (j + (r > 0)) - (j0 + (r0 > 0))
             return count
         return self._get("passages", make)
 
@@ -442,7 +512,33 @@ class HeavyTopSolution:
 
     def _phase(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(j, r): v(t) = κt + v0 = j·2K + r with integer j and r in [0, 2K) (see :mod:`mechderive.core.phase`)."""
-        return reduce_phase(self._kappa, self._v0, self._period, t)
+        j, rh, rl = self._phase_dd(t)
+        return j, rh + rl
+
+    def _phase_dd(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(j, r_hi, r_lo): as :meth:`_phase` with r kept as a double-double (Dekker/Knuth
+        transformations as in :func:`mechderive.core.phase.reduce_phase`), so that the distance of
+        r to a turning point (0, K, 2K) is known to ~1e-32·|v| absolutely, not to ulp(K)."""
+        t = np.asarray(t, dtype=float)
+        k = self._kappa
+        hi, lo = two_prod(k.hi, t)
+        lo = lo + k.lo * t
+        hi, lo = dd_add(hi, lo, self._v0.hi, self._v0.lo)
+        per = self._period
+        if per is None:
+            return np.zeros_like(t), hi, lo
+        j = np.floor(hi / per.hi)
+        ph, pl = two_prod(j, per.hi)  # exact: j is an integer below 2**53
+        pl = pl + j * per.lo
+        rh, rl = dd_add(hi, lo, -ph, -pl)
+        # the floor of the rounded hi part can be off by one at a period boundary: correct it
+        for low in (rh < 0, (rh == 0) & (rl < 0)):
+            ah, al = dd_add(rh, rl, per.hi, per.lo)
+            rh, rl, j = np.where(low, ah, rh), np.where(low, al, rl), np.where(low, j - 1, j)
+        high = (rh > per.hi) | ((rh == per.hi) & (rl >= per.lo))
+        ah, al = dd_add(rh, rl, -per.hi, -per.lo)
+        rh, rl, j = np.where(high, ah, rh), np.where(high, al, rl), np.where(high, j + 1, j)
+        return j, rh, rl
 
     # --- one pass over many quantities ---------------------------------------------------------
 
@@ -702,6 +798,9 @@ def _real_roots(coeffs: list, known: mpmath.mpf | None = None) -> list:
 _NEAR_PASSAGE = 1e-10
 #: No real input needs this many: b ∓ a resolved at d digits makes 1 ∓ u ≳ 10^(-2d).
 _MAX_DPS = 1000
+#: Below this, 1 - u2 (1 + u1) would be a subnormal or zero double: the evaluation forms
+#: 1 ∓ u = (1 ∓ u2) + (u2 - u1)cn² (sn²) and 1 - n± from it in double precision.
+_UNDERFLOW = 1e-300
 
 
 def _setup(params: dict, init: dict) -> HeavyTopSolution:
@@ -729,7 +828,26 @@ def _setup(params: dict, init: dict) -> HeavyTopSolution:
     # numbers: redo the setup with as many more digits as 1 ∓ u has leading zeros.  f(±1) = -(b ∓ a)²
     # (3.73): the apex reaches the pole (bottom) only if b = a (b = -a); a root at ±1 with b ∓ a ≠ 0
     # means the working digits could not resolve 1 ∓ u (~(b ∓ a)²) at all: double them first.
-    gaps = ((1 - u_2, b - a), (1 + u_1, b + a))
+    # b ∓ a from the state in the half angle (model.passage_factors): zero exactly when the apex
+    # passes through the pole (bottom), and resolved at any precision when it only comes near
+    # (b - a from a and b would be 0 at 40 digits for θ0 = 1e-30, posing as an exact passage)
+    d_pole, d_bottom = f["gaps"](*P, *S)
+    # an exact passage: ±1 is a root of f (3.76) exactly; the nearest computed root is it
+    if d_pole == 0:
+        if abs(u_3 - 1) < abs(u_2 - 1):
+            u_3 = mp(1)
+        else:
+            u_2 = mp(1)
+    if d_bottom == 0:
+        u_1 = mp(-1)
+    gaps = ((1 - u_2, d_pole), (1 + u_1, d_bottom))
+    tiny = [g for g, d in gaps if 0 < g < _UNDERFLOW and d != 0]
+    if tiny:
+        where = "pole" if tiny[0] == gaps[0][0] else "bottom"
+        raise InvalidInputError(
+            f"expected the apex to pass the {where} exactly or at least ~1e-150 rad from it (1 ∓ cos θ is a double), "
+            f"got a passage {mpmath.nstr(mpmath.sqrt(2 * tiny[0]), 3)} rad from it: start at θ = "
+            f"{'0' if where == 'pole' else 'π'} for a passage through it")
     if any(g == 0 and d != 0 for g, d in gaps):
         if mpmath.mp.dps >= _MAX_DPS:
             raise DerivationError(f"expected 1 - u2 and 1 + u1 resolved within {_MAX_DPS} digits, got a root at "
@@ -761,8 +879,16 @@ def _setup(params: dict, init: dict) -> HeavyTopSolution:
     u_dot0 = -mpmath.sin(th0) * S[1]
     A0 = mpmath.sign(u_dot0) * mpmath.asin(mpmath.sqrt(s0)) if u_dot0 != 0 else \
         (mpmath.pi / 2 if s0 > mp(1) / 2 else mp(0))
-    v0 = mpmath.ellipf(A0, m)
     K = mpmath.ellipk(m) if m1 != 0 else mpmath.inf
+    # v0 = F(A0|m) as (the turning point next to it) + δ0, δ0 with its full relative accuracy: past
+    # A0 = π/4, F(A0|m) = K - F(χ|m) with tan χ = cot A0 / k' (DLMF 19.7.8), cos A0 = √((u2 - u0)/amp)
+    if abs(A0) > mpmath.pi / 4 and m1 != 0:
+        anchor = int(mpmath.sign(A0))
+        chi = mpmath.atan2(mpmath.sqrt((u_2 - u0) / amp), mpmath.sqrt(m1) * mpmath.sqrt(s0))
+        dv0 = -anchor * mpmath.ellipf(chi, m)
+    else:
+        anchor, dv0 = 0, mpmath.ellipf(A0, m)
+    v0 = anchor * K + dv0 if m1 != 0 else dv0
     period = None if m1 == 0 else DD.of(2 * K)
     n_plus = (u_2 - u_1) / (1 - u_1) if u_1 < 1 else mp(0)
     n_minus = -(u_2 - u_1) / (1 + u_1) if u_1 > -1 else -mpmath.inf
@@ -774,6 +900,7 @@ def _setup(params: dict, init: dict) -> HeavyTopSolution:
         _kappa=DD.of(kappa), _v0=DD.of(v0), _period=period, _u1=float(u_1), _amp=float(amp),
         _one_minus_u2=float(1 - u_2), _one_plus_u1=float(1 + u_1), _theta_const=float(th0),
         _mp=dict(steady=False, I1=I1, I3=I3, a=a, b=b, roots=roots, kappa=kappa, m=m, m1=m1, A0=A0, K=K,
+                 anchor=anchor if period is not None else None, dv0=DD.of(dv0),
                  v0_reduced=float(v0 - 2 * K * mpmath.floor(v0 / (2 * K))) if period is not None else float(v0),
                  # sn v0 = sin A0, cn v0 = cos A0 exactly (v0 = F(A0|m), DLMF 22.16.1)
                  pole_sign=_passage_sign(mpmath.cos(A0), -mpmath.sin(A0), S[1]),

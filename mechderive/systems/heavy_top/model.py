@@ -317,6 +317,28 @@ class HeavyTopModel(LagrangianModel):
         exprs = [self.energy, self.azimuthal_momentum, self.spin_momentum]
         return self.compile("invariants", exprs, [*PARAMETERS, *STATE])
 
+    @derived
+    def passage_factors(self) -> tuple[sp.Expr, sp.Expr]:
+        """(b − a, b + a) of (3.66) in the state with θ = 2h, as 2 sin²h·(…)/I1 and 2 cos²h·(…)/I1.
+
+        f(±1) = −(b ∓ a)² (3.76): the apex reaches the pole (bottom) only if b = a (b = −a).
+        Next to the pole b − a is a difference of nearly equal numbers, p_φ/I1 − I3ω3/I1 with
+        1 − cos θ lost; in this form its factor sin²(θ/2) carries θ's smallness with full relative
+        accuracy (and cos²(θ/2) next to the bottom), so that whether b ∓ a is zero, and how small,
+        can be told from the state at any working precision.  Checked equal to b ∓ a.
+        """
+        h = sp.Symbol("h", real=True)
+        c = self.constants_from_state
+        out = []
+        for sign in (-1, 1):
+            expr = c[b] + sign * c[a]
+            in_h = sp.expand_trig(expr.subs(theta, 2 * h))
+            half = sp.factor(sp.trigsimp(sp.factor(in_h)))
+            if sp.expand(simplify_trig(half - in_h)) != 0:
+                raise DerivationError(f"expected b {'+' if sign > 0 else '−'} a in the half angle, got {half}")
+            out.append(half.subs(h, theta / 2))
+        return tuple(out)  # type: ignore[return-value]
+
     # --- (3.77)-(3.78): letting the top go ----------------------------------------------------
 
     @derived
