@@ -363,7 +363,9 @@ class _Pass:
         if sol.kind == "steady":
             return spec.start + (mod_two_pi(spec.rate, t) if reduced else spec.rate * t)
         j, r = self.phase()
-        value = spec.start + spec.c0_over_kappa * (r - sol._v0.hi - sol._v0.lo)
+        j0, r0h, r0l = sol._phase0
+        j = j - j0  # periods since t = 0; Π(n; am r0) is the terms' pi0
+        value = spec.start + spec.c0_over_kappa * (r - r0h - r0l)
         self.pis([n for _, n, _ in spec.terms])
         for c, n, pi0 in spec.terms:
             value = value + c * (self.pi(n) - pi0)
@@ -393,8 +395,10 @@ class _Pass:
     def _half_angle(self, a: _Angle, b: _Angle, sign: int) -> np.ndarray:
         sol = self.sol
         j, r = self.phase()
+        j0, r0h, r0l = sol._phase0
+        j = j - j0
         c0, coeffs, pi0s = self._combined(a, b, sign)
-        value = 0.5 * (a.start + sign * b.start) + c0 * (r - sol._v0.hi - sol._v0.lo)
+        value = 0.5 * (a.start + sign * b.start) + c0 * (r - r0h - r0l)
         self.pis([n for n, c in coeffs.items() if c != 0.0])
         for n, c in coeffs.items():
             if c != 0.0:
@@ -479,6 +483,12 @@ class HeavyTopSolution:
     _one_plus_u1: float
     _theta_const: float
     _mp: dict = field(default_factory=dict, repr=False)  # 40-digit setup values for the lazy angle constants
+
+    @functools.cached_property
+    def _phase0(self) -> tuple[float, float, float]:
+        """(j0, r0_hi, r0_lo): the reduced phase at t = 0, by the arithmetic every time goes through."""
+        j, rh, rl = self._phase_dd(np.zeros(1))
+        return float(j[0]), float(rh[0]), float(rl[0])
 
     @functools.cached_property
     def _angles(self) -> dict[str, _Angle]:
@@ -587,6 +597,13 @@ class HeavyTopSolution:
         if q == "theta_dot":
             if steady:
                 return np.zeros(t.shape)
+            if self._one_minus_u2 == 0.0 or self._one_plus_u1 == 0.0:
+                # θ = |signed θ| folded into [0, π]: θ̇ = ±(signed θ̇), the sign flipping at each
+                # exact passage; at the passage instant itself the value just after it (the passage
+                # counts as made, as in :meth:`_Pass.passages`): away from the pole, towards the bottom
+                s, c = ps.half_theta()
+                rate = self._signed_theta_dot(ps)
+                return np.where(s == 0, np.abs(rate), np.where(c == 0, -np.abs(rate), np.sign(s) * np.sign(c) * rate))
             sn, cn, dn = ps.jacobi()
             one_minus, one_plus = ps.one_minus_plus_u()
             kappa = self._kappa.hi + self._kappa.lo
@@ -630,16 +647,19 @@ class HeavyTopSolution:
         through the bottom (u1 = -1): cos(θ/2) = ±√(amp/2) sn, so θ̇ = ∓κ√(2 amp) cn dn / sin(θ/2) likewise.
         """
         sn, cn, dn = ps.jacobi()
-        theta = self._quantity(ps, "_theta_signed")
+        s, c = ps.half_theta()
         kappa = self._kappa.hi + self._kappa.lo
         parity = 1.0 - 2.0 * np.mod(ps.phase()[0], 2.0)
         k = kappa * np.sqrt(2 * self._amp) * parity
+        norm = np.hypot(s, c)
+        if self._one_minus_u2 == 0.0 and self._one_plus_u1 == 0.0:
+            # through both (u1 = -1, u2 = 1: sin θ/2 ∝ cn, cos θ/2 ∝ sn): θ̇ = -2κ dn, with the signs
+            return -self._mp["pole_sign"] * self._mp["bottom_sign"] * 2 * kappa * dn
         if self._one_minus_u2 == 0.0:
-            return -self._mp["pole_sign"] * k * sn * dn / np.cos(theta / 2)
+            return -self._mp["pole_sign"] * k * sn * dn * norm / c
         if self._one_plus_u1 == 0.0:
-            return -self._mp["bottom_sign"] * k * cn * dn / np.sin(theta / 2)
+            return -self._mp["bottom_sign"] * k * cn * dn * norm / s
         u_dot = self._quantity(ps, "u_dot")
-        s, c = ps.half_theta()
         # sin θ = 2sc/(s² + c²): np.sin of a θ rounded next to π would lose ulp(π)/(π - θ) relative
         with np.errstate(divide="ignore", invalid="ignore"):
             return -u_dot * (s * s + c * c) / (2 * s * c)
@@ -738,6 +758,11 @@ def exact_heavy_top(parameters: Mapping[str, float], initial: Mapping[str, float
     """
     params = check_params(parameters)
     init = check_initial(initial)
+    if not np.ndim(init["theta"]) and init["theta"] == 0 and init["theta_dot"] < 0:
+        raise InvalidInputError(
+            f"expected theta_dot >= 0 at theta = 0 (θ in [0, π] cannot decrease from the pole; the same motion "
+            f"is theta_dot = {-init['theta_dot']:g} with phi and psi each turned by π), got theta_dot = "
+            f"{init['theta_dot']:g}")
     for k in ("g", "l"):
         if not params[k] > 0:
             raise InvalidInputError(f"expected params['{k}'] > 0 for the heavy top's closed form (with M g l = 0 "
@@ -800,7 +825,7 @@ _NEAR_PASSAGE = 1e-10
 _MAX_DPS = 1000
 #: Below this, 1 - u2 (1 + u1) would be a subnormal or zero double: the evaluation forms
 #: 1 ∓ u = (1 ∓ u2) + (u2 - u1)cn² (sn²) and 1 - n± from it in double precision.
-_UNDERFLOW = 1e-300
+_UNDERFLOW = 1e-150
 
 
 def _setup(params: dict, init: dict) -> HeavyTopSolution:
@@ -812,6 +837,9 @@ def _setup(params: dict, init: dict) -> HeavyTopSolution:
     I1, I3 = P[0], P[1]
     th0 = S[0]
     u0 = mpmath.cos(th0)
+    # 1 ∓ u0 of the start itself, from the half angle (cos θ0 at 40 digits is 1 for θ0 < 1e-20)
+    start_gaps = (2 * mpmath.sin(th0 / 2) ** 2, 2 * mpmath.cos(th0 / 2) ** 2)
+    _refuse_too_close(start_gaps[0], "pole")  # 1 - u2 <= 1 - u0
     energy = (I1 * (S[1] ** 2 + S[2] ** 2 * mpmath.sin(th0) ** 2) + I3 * (S[3] + S[2] * u0) ** 2) / 2 \
         + P[2] * P[3] * P[4] * u0
     coeffs = f["f"](a, b, alpha, beta)
@@ -841,20 +869,13 @@ def _setup(params: dict, init: dict) -> HeavyTopSolution:
     if d_bottom == 0:
         u_1 = mp(-1)
     gaps = ((1 - u_2, d_pole), (1 + u_1, d_bottom))
-    tiny = [g for g, d in gaps if 0 < g < _UNDERFLOW and d != 0]
-    if tiny:
-        where = "pole" if tiny[0] == gaps[0][0] else "bottom"
-        raise InvalidInputError(
-            f"expected the apex to pass the {where} exactly or at least ~1e-150 rad from it (1 ∓ cos θ is a double), "
-            f"got a passage {mpmath.nstr(mpmath.sqrt(2 * tiny[0]), 3)} rad from it: start at θ = "
-            f"{'0' if where == 'pole' else 'π'} for a passage through it")
     if any(g == 0 and d != 0 for g, d in gaps):
         if mpmath.mp.dps >= _MAX_DPS:
             raise DerivationError(f"expected 1 - u2 and 1 + u1 resolved within {_MAX_DPS} digits, got a root at "
                                   f"±1 with b ∓ a = {mpmath.nstr(b - a, 3)}, {mpmath.nstr(b + a, 3)}")
         with mpmath.workdps(2 * mpmath.mp.dps):
             return _setup(params, init)
-    near = [g for g, _ in gaps if g > 0]
+    near = [g for g in (*(g for g, _ in gaps), *start_gaps) if g > 0]
     if near and min(near) < _NEAR_PASSAGE:
         # (a gap below 10^-dps is only an upper bound: the next pass measures it again)
         needed = _DPS + int(mpmath.ceil(-mpmath.log10(min(near))))
@@ -863,6 +884,8 @@ def _setup(params: dict, init: dict) -> HeavyTopSolution:
                 raise DerivationError(f"expected 1 ∓ u resolved within {_MAX_DPS} digits, got {min(near)}")
             with mpmath.workdps(needed):
                 return _setup(params, init)
+    for (g, _), where in zip(gaps, ("pole", "bottom")):
+        _refuse_too_close(g, where)
     amp = u_2 - u_1
     scale = mp(10) ** (-mpmath.mp.dps + 8)
     roots_f = (float(u_1), float(u_2), float(u_3))
@@ -906,6 +929,21 @@ def _setup(params: dict, init: dict) -> HeavyTopSolution:
                  pole_sign=_passage_sign(mpmath.cos(A0), -mpmath.sin(A0), S[1]),
                  bottom_sign=_passage_sign(mpmath.sin(A0), mpmath.cos(A0), -S[1]),
                  scale=scale, dps=mpmath.mp.dps), **common)
+
+
+def _refuse_too_close(gap, where: str) -> None:
+    """Raise unless 1 ∓ u at the closest approach to the pole (bottom), ``gap``, is 0 or ≥ :data:`_UNDERFLOW`.
+
+    Below it Carlson's R_J of the passage (~1/√(gap)·1/gap) under- or overflows in double
+    precision; the motion is then within ~1e-75 rad of the pole, where φ and ψ individually turn
+    by O(1) in a time that no double resolves — a steady approximation would be wrong for them.
+    """
+    if 0 < gap < _UNDERFLOW:
+        raise InvalidInputError(
+            f"expected the apex to stay at least ~1e-75 rad from the {where} unless it passes through it exactly "
+            f"(1 ∓ cos θ ≥ 1e-150: below, Carlson's integrals of the passage under- or overflow in double "
+            f"precision), got a motion coming within {mpmath.nstr(mpmath.sqrt(2 * gap), 3)} rad of it: use theta = "
+            f"{'0' if where == 'pole' else 'pi'} for the {where} itself, or integrate_heavy_top")
 
 
 def _passage_sign(value, slope, theta_dot) -> float:
@@ -957,30 +995,25 @@ def _angle_setup(sol: HeavyTopSolution) -> dict[str, _Angle]:
 
     The partial-fraction coefficients and the advance per nutation period come from 40-digit
     arithmetic (more near a passage, see :func:`_setup`): the advance multiplies the period count
-    j, so its double rounding would grow like j·ulp.  Π(n; am v0 | m) is double precision, except
-    for n close to 1, where it is taken at the working precision (1 - n keeps its digits).
+    j, so its double rounding would grow like j·ulp.  Π(n; am r0 | m) at the start is evaluated as
+    every sample's Π is (double precision, from the phase at t = 0).
     """
-    from ...special.integrals import elliptic_pi_incomplete
-
     if sol.kind == "steady":
         return {k: _Angle(k, sol.initial[k], 0.0, (), None, sol.initial[k + "_dot"]) for k in ("phi", "psi")}
     v = sol._mp
-    kappa, A0, m = v["kappa"], v["A0"], v["m"]
+    kappa = v["kappa"]
     fractions = sol._angle_fractions
     # φ and ψ share their characteristics n±: one vectorised Π call for all of them
     ns = sorted({n for _, kept in fractions.values() for _, n in kept})
-    far = [n for n in ns if 1 - n >= mpmath.mpf("1e-3")]
     for n in ns:
         sol._mp.setdefault("one_minus_n", {})[float(n)] = float(1 - n)  # to full relative accuracy
-    pi0 = {n: float(mpmath.ellippi(n, A0, m)) for n in ns if n not in far}  # near the pole: 1 - n keeps its digits
-    series = sol._pi_series() if far else None
-    if series is not None:
-        # Π(n; am v0 | m) from the same series the samples use: φ(0) = φ0 to rounding
-        at_v0 = series(np.array([sol._v0.hi + sol._v0.lo]))[:, 0]
-        pi0.update((n, float(at_v0[series.n.tolist().index(float(n))])) for n in far)
-    elif far:
-        n_far = np.array([float(n) for n in far])
-        pi0.update(zip(far, np.atleast_1d(elliptic_pi_incomplete(n_far, float(A0), sol.m, m1=sol.m1)).tolist()))
+    # Π(n; am r0 | m) at the phase of t = 0 by the very path every sample takes: φ(0) = φ0 and
+    # ψ(0) = ψ0 to rounding, also where Π is huge (n → 1 near the pole, ~1/√(1 - n)) or
+    # ill-conditioned in the amplitude (m → 1: Π(n; A | m) from a rounded A0 next to π/2 erred
+    # 7e-12 at m1 = 3e-13, and φ(0) with it)
+    at_start = _Pass(sol, np.zeros(1))
+    at_start.pis([float(n) for n in ns])
+    pi0 = {n: float(at_start.pi(float(n))[0]) for n in ns}
     out = {}
     for name in ("phi", "psi"):
         c0, kept = fractions[name]
