@@ -279,6 +279,27 @@ class HeavyTopModel(LagrangianModel):
         return _over_one_minus_u2(_in_u(self.spin_rate_theta))
 
     @derived
+    def rates_near_poles(self) -> tuple[sp.Expr, sp.Expr]:
+        """(φ̇, ψ̇) of (3.74)–(3.75) in x = 1 − u, y = 1 + u and d∓ = b ∓ a: their partial fractions in u.
+
+        Formed so in floating point, nothing cancels near the pole or the bottom: 1 ∓ u enter
+        themselves (not 1 − u² from a rounded u), and b − a (tiny near a pole passage) as a number
+        known to full relative accuracy.  Symbols ``x_pole y_bottom d_minus d_plus`` (real).
+        """
+        x, y, dm, dp = sp.symbols("x_pole y_bottom d_minus d_plus", real=True)
+        out = []
+        for rate in (self.precession_rate_u, self.spin_rate_u):
+            parts = sp.apart(sp.together(rate), u).xreplace({u - 1: -x, u + 1: y})
+            parts = sp.expand(parts.subs({a: (dp - dm) / 2, b: (dp + dm) / 2}))
+            if parts.has(u):
+                raise DerivationError(f"expected the rate in 1 − u and 1 + u only, got {parts}")
+            back = parts.subs({x: 1 - u, y: 1 + u, dm: b - a, dp: b + a})
+            if sp.cancel(sp.together(back - rate)) != 0:
+                raise DerivationError(f"expected the partial fractions to reproduce {rate}, got {parts}")
+            out.append(sp.collect(parts, [x, y], sp.factor))
+        return tuple(out)  # type: ignore[return-value]
+
+    @derived
     def f_at_poles(self) -> tuple[sp.Expr, sp.Expr]:
         """(f(1), f(−1)) (3.76), factored."""
         return tuple(sp.factor(self.f_u.subs(u, x)) for x in (1, -1))  # type: ignore[return-value]
