@@ -176,9 +176,17 @@ class _Estimator:
         return [np.where(upper, m - x, y - p) for m, p in zip(gm, gp)]
 
     def _f_and_slope(self, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return self._f_slope_noise(x, y)[:2]
+
+    def _f_slope_noise(self, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """f (3.73) in its roots, f', and the rounding of f from that of each u − u_k (ulp of 1 ∓ u_k, 1 ∓ u)."""
         beta = self.sol._mp["beta"]
         d1, d2, d3 = self._differences(x, y)
-        return beta * d1 * d2 * d3, beta * (d2 * d3 + d1 * d3 + d1 * d2)
+        gm, gp = self.sol._mp["gaps_minus"], self.sol._mp["gaps_plus"]
+        upper = x <= y
+        r = [_EPS * np.maximum(np.where(upper, abs(m), abs(p)), np.where(upper, x, y)) for m, p in zip(gm, gp)]
+        noise = beta * (r[0] * np.abs(d2 * d3) + r[1] * np.abs(d1 * d3) + r[2] * np.abs(d1 * d2))
+        return beta * d1 * d2 * d3, beta * (d2 * d3 + d1 * d3 + d1 * d2), noise
 
     def _kappa(self) -> float:
         return self.sol._kappa.hi + self.sol._kappa.lo
@@ -192,11 +200,13 @@ class _Estimator:
         sn, cn, dn = ps.jacobi()
         x, y = ps.one_minus_plus_u()
         u_dot = 2 * kappa * amp * sn * cn * dn
-        f, slope = self._f_and_slope(x, y)
+        f, slope, f_noise = self._f_slope_noise(x, y)
         residual = np.abs(u_dot * u_dot - f)
         with np.errstate(divide="ignore", invalid="ignore"):
             du = np.where(residual > 0, residual / (np.abs(slope) + 2 * kappa * np.abs(u_dot)), 0.0)
-        du = np.nan_to_num(du, nan=np.inf)
+        # u(t) = u1 + (u2 - u1) sn² never leaves [u1, u2]: no residual can mean more than that
+        # (next to a double root the differences u - u_k are below their own rounding)
+        du = np.minimum(np.nan_to_num(du, nan=np.inf), amp + 4 * _EPS)
         sin_theta = np.sqrt(x * y)
         with np.errstate(divide="ignore", invalid="ignore"):
             dtheta = np.where(du > 0, du / np.maximum(sin_theta, np.sqrt(du)), 0.0)
@@ -214,13 +224,24 @@ class _Estimator:
         tau = 2 * dx0 / (u_dot0 + math.sqrt(u_dot0**2 + abs(float(slope0[0])) * dx0)) if dx0 > 0 else 0.0
         theta_max = float(np.max(2 * np.arctan2(np.sqrt(x), np.sqrt(y))))
         u_dot_max = float(np.max(np.abs(u_dot)))
-        d_theta = (float(np.max(dtheta)) + theta_rate_max * tau + abs(start["theta"] - th0)
+        # (c) a wrong rate of the phase (κ, or m through the period) is a residual that does not
+        # average out: u̇² = (1 + e)² f, e = residual/(2f) away from the turning points, less the
+        # residual's own rounding (u̇² and f each to ~4 ulp); its phase error grows like e·|t|
+        swing = (u_dot * u_dot >= 0.25 * u_dot_max**2) & (np.abs(f) > 100 * f_noise)
+        rate_error = 0.0
+        if np.any(swing):
+            significant = residual[swing] - 4 * _EPS * (u_dot[swing] ** 2 + np.abs(f[swing])) - 2 * f_noise[swing]
+            rate_error = max(float(np.max(significant / (2 * np.abs(f[swing])))), 0.0)
+        t_abs = np.abs(self.t)
+        drift = rate_error * t_abs  # the time shift the phase has accumulated by each sample
+        d_theta = (float(np.max(dtheta + theta_rate * drift)) + theta_rate_max * tau + abs(start["theta"] - th0)
                    + 4 * float(np.spacing(theta_max)) + 4 * _EPS)
-        d_u = float(np.max(du)) + u_dot_max * tau + 4 * _EPS
+        d_u = float(np.max(du + np.abs(u_dot) * drift)) + u_dot_max * tau + 4 * _EPS
         d_theta_dot = 2 * kappa * d_theta + 8 * _EPS * theta_rate_max
         if "theta_dot" in start:
             d_theta_dot += abs(start["theta_dot"] - sol.initial["theta_dot"])
-        return {"u": d_u, "u_dot": 2 * kappa * d_u + 8 * _EPS * u_dot_max, "theta": d_theta, "theta_dot": d_theta_dot}
+        return {"u": d_u, "u_dot": 2 * kappa * d_u + 8 * _EPS * u_dot_max, "theta": d_theta, "theta_dot": d_theta_dot,
+                "time_shift": drift + tau}
 
     def _start(self) -> dict[str, float]:
         """1 ∓ u, θ, θ̇ at t = 0 by the evaluation's path (one point)."""
@@ -318,16 +339,19 @@ class _Estimator:
         diff = closed - quadrature
         if reduced:
             diff = (diff + np.pi) % (2 * np.pi) - np.pi
-        # rounding of both sides: the values, the quadrature sums; t's own rounding × the rate there
+        # rounding of both sides: the values, the quadrature sums
         x, y = ps.one_minus_plus_u()
-        rate = np.abs(self._derived_rates(x.ravel()[picks], y.ravel()[picks])[self._INDEX[which]])
-        noise = (4 * np.spacing(np.abs(values[picks]) + abs(start)) + 4 * _EPS * (size + size0[0])
-                 + _EPS * np.abs(t.ravel()[picks]) * np.where(np.isfinite(rate), rate, 0.0))
+        noise = 4 * np.spacing(np.abs(values[picks]) + abs(start)) + 4 * _EPS * (size + size0[0])
         worst = float(np.max(np.abs(diff) + noise)) if len(picks) else 0.0
-        # the rounding of t at every sample, amplified by the rate there (near a pole passage
-        # |φ̇| ~ |b − a|/(1 − u2): this was the planner's 3e-17 × conditioning)
+        # A shift of the time the phase stands for moves the angle by rate × shift, and the
+        # quadrature (along the same phase) cannot see it: the shift the nutation checks measured
+        # (a wrong phase rate or start), and the rounding of the reduced phase itself, a few ulp of
+        # K, i.e. 4ε·K/κ in time — amplified by the rate at each sample (near a pole passage
+        # |φ̇| ~ |b − a|/(1 − u2): this is what the planner's 3e-17 × conditioning stood for)
         all_rates = np.abs(self._derived_rates(x, y)[self._INDEX[which]])
-        t_rounding = float(np.max(_EPS * np.abs(t) * np.where(np.isfinite(all_rates), all_rates, 0.0)))
+        all_rates = np.where(np.isfinite(all_rates), all_rates, 0.0)
+        shift = self.nutation()["time_shift"] + 4 * _EPS * (sol._period.hi / 2) / self._kappa()
+        t_rounding = float(np.max(all_rates * np.broadcast_to(shift, all_rates.shape)))
         ulp_values = 4 * float(np.spacing(float(np.max(np.abs(values))) if values.size else 0.0))
         continuous = worst + t_rounding + ulp_values + 4 * _EPS
         wrapped = worst + t_rounding + 4 * _EPS * math.pi
