@@ -20,7 +20,8 @@ reuses the evaluation's intermediates (the :class:`~.exact._Pass` of the same ti
    are one quadrature over [0, T] times their number (the rates have period T), checked against
    the closed form at n·T; the panels are split at the turning points and graded geometrically
    towards them when the rate has a narrow spike there (a near passage).
-3. **Rates** φ̇, ψ̇ (and ω): the closed form's partial fractions against the derived rates at the samples.
+3. **Rates** φ̇, ψ̇ (and ω), output from the derived rates in 1 ∓ u: against the partial fractions in
+   sn² (the angles' integrands) at the samples.
 4. **Rounding** of what is output: the ulp of the continuous angles; the rounding of t itself
    amplified by the largest rate (near a pole passage |φ̇| ~ |b − a|/(1 − u2): the reasoning that
    was the planner's 3e-17 × conditioning); a few ulp of each quantity.
@@ -55,29 +56,6 @@ _NUTATION = ("u", "u_dot", "theta", "theta_dot")
 _PHI = ("phi", "phi_wrapped", "phi_dot")
 _PSI = ("psi", "psi_wrapped", "psi_dot")
 _HALF = ("R", "omega")
-
-
-@functools.cache
-def _rates():
-    """[φ̇, ψ̇, (φ̇ + ψ̇)/2, (φ̇ − ψ̇)/2] (3.74)–(3.75) in (I1, I3, b − a, b + a, 1 − u, 1 + u), derived.
-
-    The half sum and difference are simplified symbolically, so that the 1/(1 − u) spike of a near
-    pole passage (1/(1 + u) near the bottom) is absent from the one it cancels in, not cancelled
-    in floating point.
-    """
-    from ...core.codecache import cached_lambdify
-
-    def build():
-        import sympy as sp
-
-        from . import model as hm
-
-        phi_dot, psi_dot = hm.model().rates_near_poles
-        x, y, dm, dp = sp.symbols("x_pole y_bottom d_minus d_plus", real=True)
-        half = [sp.collect(sp.expand((phi_dot + s * psi_dot) / 2), [x, y], sp.factor) for s in (1, -1)]
-        return [hm.I1, hm.I3, dm, dp, x, y], [phi_dot, psi_dot, *half]
-
-    return cached_lambdify("heavy_top.rates_near_poles", build, module="numpy")[0]
 
 
 @functools.cache
@@ -269,18 +247,22 @@ class _Estimator:
     # --- 3. rates -----------------------------------------------------------------------------
 
     def _derived_rates(self, x: np.ndarray, y: np.ndarray) -> list[np.ndarray]:
+        from .exact import _derived_rates
+
         v = self.sol._mp
         with np.errstate(divide="ignore", invalid="ignore"):
-            out = _rates()(float(v["I1"]), float(v["I3"]), v["d_minus"], v["d_plus"], x, y)
+            out = _derived_rates()(float(v["I1"]), float(v["I3"]), v["d_minus"], v["d_plus"], x, y)
         return [np.broadcast_to(np.asarray(r, dtype=float), np.shape(x)) for r in out]
 
     def rate_check(self) -> dict[str, float]:
         return self._get("rates", self._rate_check)
 
     def _rate_check(self) -> dict[str, float]:
+        """The output rates (3.74)–(3.75) in 1 ∓ u against the partial fractions in sn² the angles are
+        integrated from — an independent path whose own rounding (terms ~1/(1 − n₊) cancelling
+        near the pole) makes the difference an overestimate there."""
         sol, ps = self.sol, self.ps
-        x, y = ps.one_minus_plus_u()
-        phi_dot, psi_dot, sig_dot, del_dot = self._derived_rates(x, y)
+        phi_dot, psi_dot, sig_dot, del_dot = ps.derived_rates()
         a, b = sol._angles["phi"], sol._angles["psi"]
         closed = {"phi": ps.rate(a), "psi": ps.rate(b), "sigma": ps.half_rate(a, b, +1), "delta": ps.half_rate(a, b, -1)}
         derived = {"phi": phi_dot, "psi": psi_dot, "sigma": sig_dot, "delta": del_dot}

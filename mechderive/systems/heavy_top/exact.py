@@ -141,6 +141,30 @@ def _omega_half_angles():
     return cached_lambdify("heavy_top.omega_half_angles", build, module="numpy")[0]
 
 
+@functools.cache
+def _derived_rates():
+    """[φ̇, ψ̇, (φ̇ + ψ̇)/2, (φ̇ − ψ̇)/2] (3.74)–(3.75) in (I1, I3, b − a, b + a, 1 − u, 1 + u), derived.
+
+    The rates the solution outputs (:meth:`_Pass.derived_rates`): 1 ∓ u and b ∓ a enter with full
+    relative accuracy, so nothing cancels near the pole or the bottom (the partial fractions in
+    sn² have terms ~1/(1 − n₊) that cancel there).  The half sum and difference are simplified
+    symbolically, so the 1/(1 − u) spike of a near pole passage (1/(1 + u) near the bottom) is
+    absent from the one it cancels in, not cancelled in floating point.
+    """
+    def build():
+        import sympy as sp
+
+        from . import model as hm
+
+        phi_dot, psi_dot = hm.model().rates_near_poles
+        x, y = sp.symbols("x_pole y_bottom", real=True)
+        half = [sp.collect(sp.expand((phi_dot + s * psi_dot) / 2), [x, y], sp.factor) for s in (1, -1)]
+        dm, dp = sp.symbols("d_minus d_plus", real=True)
+        return [hm.I1, hm.I3, dm, dp, x, y], [phi_dot, psi_dot, *half]
+
+    return cached_lambdify("heavy_top.rates_near_poles", build, module="numpy")[0]
+
+
 @dataclass(frozen=True)
 class _Angle:
     """The closed form of one precession-type angle: start, linear part, Π terms, advance per period."""
@@ -362,10 +386,12 @@ class _Pass:
         sol, t = self.sol, self.t
         if sol.kind == "steady":
             return spec.start + (mod_two_pi(spec.rate, t) if reduced else spec.rate * t)
-        j, r = self.phase()
+        j, rh, rl = self.phase_dd()
         j0, r0h, r0l = sol._phase0
         j = j - j0  # periods since t = 0; Π(n; am r0) is the terms' pi0
-        value = spec.start + spec.c0_over_kappa * (r - r0h - r0l)
+        # r - r0 from the double-double phases (rh - r0h exact when close): r ~ K, whose ulp would
+        # otherwise show at t = 0 (R(0) was 18 ulp off at K = 140)
+        value = spec.start + spec.c0_over_kappa * ((rh - r0h) + (rl - r0l))
         self.pis([n for _, n, _ in spec.terms])
         for c, n, pi0 in spec.terms:
             value = value + c * (self.pi(n) - pi0)
@@ -394,11 +420,11 @@ class _Pass:
 
     def _half_angle(self, a: _Angle, b: _Angle, sign: int) -> np.ndarray:
         sol = self.sol
-        j, r = self.phase()
+        j, rh, rl = self.phase_dd()
         j0, r0h, r0l = sol._phase0
         j = j - j0
         c0, coeffs, pi0s = self._combined(a, b, sign)
-        value = 0.5 * (a.start + sign * b.start) + c0 * (r - r0h - r0l)
+        value = 0.5 * (a.start + sign * b.start) + c0 * ((rh - r0h) + (rl - r0l))
         self.pis([n for n, c in coeffs.items() if c != 0.0])
         for n, c in coeffs.items():
             if c != 0.0:
@@ -420,6 +446,22 @@ class _Pass:
         for c, n, _ in spec.terms:
             value = value + c * self._kappa_over_q(n)
         return value
+
+    def derived_rates(self) -> list[np.ndarray]:
+        """[φ̇, ψ̇, (φ̇ + ψ̇)/2, (φ̇ − ψ̇)/2] from u(t) by (3.74)–(3.75) (:func:`_derived_rates`).
+
+        At an exact passage b ∓ a = 0 and its term is absent (1 ∓ u may be 0 there).
+        """
+        def make():
+            v = self.sol._mp
+            x, y = self.one_minus_plus_u()
+            dm, dp = v["d_minus"], v["d_plus"]
+            x = np.where(x == 0, 1.0, x) if dm == 0 else x
+            y = np.where(y == 0, 1.0, y) if dp == 0 else y
+            with np.errstate(divide="ignore", invalid="ignore"):
+                out = _derived_rates()(float(v["I1"]), float(v["I3"]), dm, dp, x, y)
+            return [np.broadcast_to(np.asarray(r, dtype=float), np.shape(x)) for r in out]
+        return self._get("rates", make)
 
     def half_rate(self, a: _Angle, b: _Angle, sign: int) -> np.ndarray:
         """d/dt of :meth:`half_angle`: its combined terms, so (φ̇ + ψ̇)/2 has no n₊ term, (φ̇ - ψ̇)/2 no n₋."""
@@ -644,7 +686,9 @@ class HeavyTopSolution:
                 return x - 2 * np.pi * np.round(x / (2 * np.pi))
             return ps.angle(spec, reduced=False) + (np.pi * ps.passages() if not steady else 0.0)
         if q in ("phi_dot", "psi_dot"):
-            return ps.rate(self._angles[q[:3]])
+            if steady:
+                return np.full(t.shape, self.initial[q])
+            return ps.derived_rates()[0 if q == "phi_dot" else 1]
         if q == "R":
             if steady:
                 return rotation_matrix(ps.angle(self._angles["phi"], reduced=True), self._theta_const,
@@ -664,7 +708,7 @@ class HeavyTopSolution:
             phi, psi = self._angles["phi"], self._angles["psi"]
             s, c = ps.half_theta()
             w = _omega_half_angles()(ps.half_angle(phi, psi, +1), ps.half_angle(phi, psi, -1), s, c,
-                                     ps.half_rate(phi, psi, +1), ps.half_rate(phi, psi, -1),
+                                     ps.derived_rates()[2], ps.derived_rates()[3],
                                      self._signed_theta_dot(ps))
             return np.stack(np.broadcast_arrays(*w), axis=-1)
         raise InvalidInputError(f"unknown quantity {q!r}: expected one of {', '.join(QUANTITIES)}")
