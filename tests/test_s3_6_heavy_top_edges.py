@@ -245,6 +245,17 @@ def test_random_motions_against_reference(theta, theta_dot, phi_dot, psi_dot):
     check_motion(TOP, dict(theta=theta, theta_dot=theta_dot, phi_dot=phi_dot, psi_dot=psi_dot), n=5)
 
 
+def test_leaving_the_pole_along_the_separatrix():
+    # Regression (found by the random sweep): from the pole with θ̇0 = 4e-38 and a spin below the
+    # sleeping threshold, u3 - u2 ~ 1e-76 was found at 40 digits as 1e-21 (a near double root solved to
+    # the square root of the precision): θ came out 1e-8 instead of 1e-36, with an estimate of 9e-16.
+    params = dict(TOP, I3=0.125)
+    err = check_motion(params, dict(theta=0.0, theta_dot=4.17616425727919e-38, psi_dot=2.0), n=5)
+    assert err is not None
+    with pytest.raises(InvalidInputError, match="separatrix"):  # 1 - m = 3e-161: beyond a double
+        exact_heavy_top(params, dict(theta=0.0, theta_dot=1e-80, psi_dot=2.0))
+
+
 def test_refusals_say_why():
     # θ̇ < 0 on the pole leaves θ's range [0, π]; an apex within 1e-75 rad of the pole (not through it)
     # is beyond double precision's Carlson integrals.  Both: InvalidInputError, "expected …, got …".
@@ -305,7 +316,7 @@ def test_sweep_against_reference(name, init):
 
 
 @pytest.mark.slow
-@settings(max_examples=80, deadline=None, derandomize=True)
+@settings(max_examples=50, deadline=None, derandomize=True)
 @given(theta=st.one_of(st.floats(0.0, np.pi), st.floats(0.0, 1e-6), st.floats(np.pi - 1e-6, np.pi)),
        theta_dot=st.floats(0.0, 5.0), phi_dot=st.floats(-5.0, 5.0), psi_dot=st.floats(-50.0, 50.0),
        I3=st.floats(0.05, 1.9))
