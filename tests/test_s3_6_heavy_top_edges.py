@@ -9,6 +9,7 @@ and the hand-written Newton–Euler equations integrated by mpmath's Taylor seri
 
 from __future__ import annotations
 
+import functools
 import warnings
 
 import mpmath
@@ -223,7 +224,6 @@ QUICK = {
     "hanging-through-the-bottom": (dict(theta=np.pi, theta_dot=0.3), False),
     "on-the-pole-looping": (dict(theta=0.0, theta_dot=3.0, psi_dot=1.0), False),
     "p_psi-0": (dict(theta=1.0, theta_dot=0.7, phi_dot=0.8, psi_dot=-0.8 * np.cos(1.0)), True),
-    "separatrix-m1-3e-13": (dict(theta=1e-6, psi_dot=1.0), False),
 }
 
 
@@ -353,15 +353,20 @@ def _plant(top, what: str) -> None:
     top.__dict__["_angles"] = angles
 
 
+@functools.cache
+def _general_run() -> tuple:
+    """Times past the first nutation period (the advance per period enters), the honest estimate, the reference."""
+    top = exact_heavy_top(TOP, GENERAL)
+    t = np.linspace(0.0, 2.5 * top.nutation_period, 9)
+    return t, top.error_estimate(t, ["phi", "R"]), heavy_reference(TOP, GENERAL, t)
+
+
 @pytest.mark.parametrize("what", ["phase rate κ", "Π coefficient", "Π at the start", "advance per period"])
 def test_estimate_catches_a_planted_wrong_constant(what):
-    top = exact_heavy_top(TOP, GENERAL)
-    t = np.linspace(0.0, 2.5 * top.nutation_period, 9)  # past the first period: the advance enters
-    honest = top.error_estimate(t, ["phi", "R"])
+    t, honest, ref = _general_run()
     top = exact_heavy_top(TOP, GENERAL)
     _plant(top, what)
     out = top.evaluate(t, ["phi", "R", "theta"])
-    ref = heavy_reference(TOP, GENERAL, t)
     actual = {"phi": np.max(np.abs(_wrap(out["phi"] - ref.angles[:, 0]))), "R": np.max(np.abs(out["R"] - ref.R)),
               "theta": np.max(np.abs(out["theta"] - ref.angles[:, 1]))}
     worst = max(actual.values())
