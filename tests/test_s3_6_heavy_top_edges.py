@@ -9,6 +9,7 @@ and the hand-written Newton–Euler equations integrated by mpmath's Taylor seri
 
 from __future__ import annotations
 
+import functools
 import warnings
 
 import mpmath
@@ -223,7 +224,6 @@ QUICK = {
     "hanging-through-the-bottom": (dict(theta=np.pi, theta_dot=0.3), False),
     "on-the-pole-looping": (dict(theta=0.0, theta_dot=3.0, psi_dot=1.0), False),
     "p_psi-0": (dict(theta=1.0, theta_dot=0.7, phi_dot=0.8, psi_dot=-0.8 * np.cos(1.0)), True),
-    "separatrix-m1-3e-13": (dict(theta=1e-6, psi_dot=1.0), False),
 }
 
 
@@ -243,6 +243,17 @@ def test_uniform_precession_and_p_phi_zero_against_reference():
        psi_dot=st.floats(-20.0, 20.0))
 def test_random_motions_against_reference(theta, theta_dot, phi_dot, psi_dot):
     check_motion(TOP, dict(theta=theta, theta_dot=theta_dot, phi_dot=phi_dot, psi_dot=psi_dot), n=5)
+
+
+def test_leaving_the_pole_along_the_separatrix():
+    # Regression (found by the random sweep): from the pole with θ̇0 = 4e-38 and a spin below the
+    # sleeping threshold, u3 - u2 ~ 1e-76 was found at 40 digits as 1e-21 (a near double root solved to
+    # the square root of the precision): θ came out 1e-8 instead of 1e-36, with an estimate of 9e-16.
+    params = dict(TOP, I3=0.125)
+    err = check_motion(params, dict(theta=0.0, theta_dot=4.17616425727919e-38, psi_dot=2.0), n=5)
+    assert err is not None
+    with pytest.raises(InvalidInputError, match="separatrix"):  # 1 - m = 3e-161: beyond a double
+        exact_heavy_top(params, dict(theta=0.0, theta_dot=1e-80, psi_dot=2.0))
 
 
 def test_refusals_say_why():
@@ -305,10 +316,11 @@ def test_sweep_against_reference(name, init):
 
 
 @pytest.mark.slow
-@settings(max_examples=80, deadline=None, derandomize=True)
+@settings(max_examples=300, deadline=None, derandomize=True)
 @given(theta=st.one_of(st.floats(0.0, np.pi), st.floats(0.0, 1e-6), st.floats(np.pi - 1e-6, np.pi)),
-       theta_dot=st.floats(0.0, 5.0), phi_dot=st.floats(-5.0, 5.0), psi_dot=st.floats(-50.0, 50.0),
-       I3=st.floats(0.05, 1.9))
+       theta_dot=st.one_of(st.floats(0.0, 5.0), st.floats(0.0, 1e-20)),
+       phi_dot=st.one_of(st.floats(-5.0, 5.0), st.floats(-1e-20, 1e-20)),
+       psi_dot=st.one_of(st.floats(-50.0, 50.0), st.floats(-1e6, 1e6)), I3=st.floats(0.05, 1.9))
 def test_random_sweep_against_reference(theta, theta_dot, phi_dot, psi_dot, I3):
     check_motion(dict(TOP, I3=I3), dict(theta=theta, theta_dot=theta_dot, phi_dot=phi_dot, psi_dot=psi_dot), n=7)
 
@@ -341,15 +353,20 @@ def _plant(top, what: str) -> None:
     top.__dict__["_angles"] = angles
 
 
+@functools.cache
+def _general_run() -> tuple:
+    """Times past the first nutation period (the advance per period enters), the honest estimate, the reference."""
+    top = exact_heavy_top(TOP, GENERAL)
+    t = np.linspace(0.0, 2.5 * top.nutation_period, 9)
+    return t, top.error_estimate(t, ["phi", "R"]), heavy_reference(TOP, GENERAL, t)
+
+
 @pytest.mark.parametrize("what", ["phase rate κ", "Π coefficient", "Π at the start", "advance per period"])
 def test_estimate_catches_a_planted_wrong_constant(what):
-    top = exact_heavy_top(TOP, GENERAL)
-    t = np.linspace(0.0, 2.5 * top.nutation_period, 9)  # past the first period: the advance enters
-    honest = top.error_estimate(t, ["phi", "R"])
+    t, honest, ref = _general_run()
     top = exact_heavy_top(TOP, GENERAL)
     _plant(top, what)
     out = top.evaluate(t, ["phi", "R", "theta"])
-    ref = heavy_reference(TOP, GENERAL, t)
     actual = {"phi": np.max(np.abs(_wrap(out["phi"] - ref.angles[:, 0]))), "R": np.max(np.abs(out["R"] - ref.R)),
               "theta": np.max(np.abs(out["theta"] - ref.angles[:, 1]))}
     worst = max(actual.values())

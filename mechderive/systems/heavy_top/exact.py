@@ -34,6 +34,19 @@ amplified in φ there (near the bottom likewise 1 - n₋, with φ - ψ accurate)
 and ω are well conditioned through such passages and are formed so: from the half sums and
 differences (φ ± ψ)/2, their rates, and (sin θ/2, cos θ/2); 1 - u2, 1 + u1 and the advance per
 period are computed with as many extra digits as the passage needs, and Π(n₊) from 1 - n₊ itself.
+
+Edges (issue 11; tests/test_s3_6_heavy_top_edges.py sweeps them against 30-digit references).
+sn, cn, dn are taken at the distance of the phase from the nearest turning point, formed in
+double-double (and from δ0 = v0 − turning point at the setup's precision near the start), so
+that 1 ∓ u keeps its digits next to the pole and the bottom; b ∓ a comes from the state in half
+angles (so θ0 = 1e-30 is not mistaken for a passage through the pole); φ̇ and ψ̇ are output from
+(3.74)–(3.75) in 1 ∓ u; Π(n; am r0) at the start is evaluated by the path every sample takes, so
+φ(0) = φ0.  Refused, with an :class:`~mechderive.errors.InvalidInputError` saying why: θ̇ < 0 at
+θ = 0 (θ cannot leave [0, π]; the same motion has θ̇ > 0 and φ, ψ turned by π), and motions whose
+apex comes within ~1e-75 rad of the pole or the bottom without passing through it (1 ∓ cos θ
+below 1e-150: Carlson's integrals of the passage under- or overflow in double precision).  On
+the pole (θ0 = 0) only φ + ψ and φ̇ + ψ̇ are defined; φ̇(0), ψ̇(0) are then the motion's limits.
+:meth:`HeavyTopSolution.error_estimate` measures each run's error (:mod:`.estimate`).
 """
 
 from __future__ import annotations
@@ -922,7 +935,14 @@ def _setup(params: dict, init: dict) -> HeavyTopSolution:
     coeffs = f["f"](a, b, alpha, beta)
     common = dict(parameters=dict(params), initial=dict(init), energy=float(energy), p_phi=float(I1 * b),
                   p_psi=float(I1 * a), f_coefficients=tuple(float(c) for c in coeffs))
-    u_1, u_2, u_3 = _real_roots(coeffs, known=u0 if S[1] == 0 else None)
+    d_pole, d_bottom = f["gaps"](*P, *S)
+    # a root known exactly deflates the cubic, and the other two come from a quadratic without loss:
+    # ±1 at an exact passage (f(±1) = -(b ∓ a)², 3.76), u0 for a start at a turning point (θ̇0 = 0).
+    # Otherwise a near double root u2 ≈ u3 (next to the separatrix) is only found to the square
+    # root of the working precision (m1 = 1.2e-21 came out for 1e-76 at 40 digits: θ 1e-8 for 1e-36)
+    known = mp(1) if d_pole == 0 else mp(-1) if d_bottom == 0 else u0 if S[1] == 0 else None
+    u_1, u_2, u_3 = _real_roots(coeffs, known=known)
+    separated = known is not None and known in (u_2, u_3)  # u3 - u2 then to the working precision
     # u0 lies in [u1, u2] up to the roots' own accuracy (40 digits); snap it in, and keep the
     # turning points in [-1, 1] (a root at ±1 can come out as ±(1 + 4e-40)).
     u_2, u_1 = min(max(u_2, u0), mp(1)), max(min(u_1, u0), mp(-1))
@@ -936,7 +956,6 @@ def _setup(params: dict, init: dict) -> HeavyTopSolution:
     # b ∓ a from the state in the half angle (model.passage_factors): zero exactly when the apex
     # passes through the pole (bottom), and resolved at any precision when it only comes near
     # (b - a from a and b would be 0 at 40 digits for θ0 = 1e-30, posing as an exact passage)
-    d_pole, d_bottom = f["gaps"](*P, *S)
     # an exact passage: ±1 is a root of f (3.76) exactly; the nearest computed root is it
     if d_pole == 0:
         if abs(u_3 - 1) < abs(u_2 - 1):
@@ -953,6 +972,17 @@ def _setup(params: dict, init: dict) -> HeavyTopSolution:
         with mpmath.workdps(2 * mpmath.mp.dps):
             return _setup(params, init)
     near = [g for g in (*(g for g, _ in gaps), *start_gaps) if g > 0]
+    # next to the separatrix (u3 - u2 → 0, m → 1): u3 - u2 to ~40 digits as well, which takes
+    # twice its leading zeros when u2 and u3 are a near double root of one solve
+    sep = u_3 - u_2
+    if 0 < sep < _NEAR_PASSAGE:
+        near.append(sep if separated else sep**2)
+    elif sep == 0 and u_2 - u_1 > 0 and S[1] != 0:
+        # u2 = u3 is a sleeping top at the stability threshold — not a moving one: unresolved
+        if mpmath.mp.dps >= _MAX_DPS:
+            raise DerivationError(f"expected u3 - u2 resolved within {_MAX_DPS} digits, got 0")
+        with mpmath.workdps(2 * mpmath.mp.dps):
+            return _setup(params, init)
     if near and min(near) < _NEAR_PASSAGE:
         # (a gap below 10^-dps is only an upper bound: the next pass measures it again)
         needed = _DPS + int(mpmath.ceil(-mpmath.log10(min(near))))
@@ -975,6 +1005,11 @@ def _setup(params: dict, init: dict) -> HeavyTopSolution:
                                               d_plus=float(d_bottom)), **common)
     roots = (u_1, u_2, u_3)
     kappa2, m, m1 = f["nutation"](beta, *roots)
+    if m1 < _UNDERFLOW:
+        raise InvalidInputError(
+            f"expected the motion at least 1e-150 from the separatrix (1 - m >= 1e-150: the nutation period "
+            f"~ln(1/(1 - m)) and the Jacobi functions take 1 - m as a double), got 1 - m = {mpmath.nstr(m1, 3)}: "
+            f"integrate_heavy_top follows such a motion")
     kappa = mpmath.sqrt(kappa2)
     s0 = min(max((u0 - u_1) / amp, mp(0)), mp(1))
     u_dot0 = -mpmath.sin(th0) * S[1]
