@@ -38,6 +38,8 @@ from typing import Any
 
 import numpy as np
 
+from ...errors import DerivationError
+
 __all__ = ["estimate"]
 
 _EPS = float(np.finfo(float).eps)
@@ -119,7 +121,7 @@ class _Estimator:
             w = self._omega_scale()
             return (2 * (rates["sigma"] + rates["delta"]) + nut["theta_dot"]
                     + w * (self.angle("sigma") + self.angle("delta") + nut["theta"]) + 8 * _EPS * w)
-        raise KeyError(q)
+        raise DerivationError(f"no error estimate for the quantity {q!r}")  # pragma: no cover - internal
 
     # --- steady motion (a double root of f): constant θ and rates --------------------------------
 
