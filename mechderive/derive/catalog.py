@@ -200,10 +200,11 @@ _HEAVY = {
     "uniform_precession": Quantity("the condition for precession without nutation at θ0", "3.80",
                                    lambda o: _heavy().uniform_precession_condition.rhs,
                                    lambda: _heavy().uniform_precession_condition.lhs),
-    "precession_rates": Quantity("the slow and fast uniform precession rates φ̇ solving (3.80)", "3.80",
+    "precession_rates": Quantity("the slow and fast uniform precession rates φ̇ solving (3.80), slow the smaller |φ̇| "
+                                 "(cancellation-free: M g l/(I3 ω3) at θ0 = π/2)", "3.80",
                                  lambda o: sp.Matrix(_heavy().precession_rates),
                                  lambda: sp.Matrix(sp.symbols("phidot_slow phidot_fast"))),
-    "minimum_spin": Quantity("the least spin ω3 for uniform precession at θ0", "3.81", _heavy_q("minimum_spin"),
+    "minimum_spin": Quantity("the least spin ω3 for uniform precession at θ0 (0 for θ0 ≥ π/2: any spin)", "3.81", _heavy_q("minimum_spin"),
                              lambda: sp.Symbol("omega_3min")),
     "sleeping_f": Quantity("f(u) of the sleeping top, θ = θ̇ = 0", "3.83", _heavy_q("sleeping_f"),
                            lambda: sp.Function("f")(sp.Symbol("u", real=True))),

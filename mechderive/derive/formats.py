@@ -210,6 +210,28 @@ def _check_args(flat: Sequence[sp.Expr], args: Sequence[Any]) -> list[sp.Symbol]
 _PY_RESERVED = {"numpy", "_values", "_shape"}
 
 
+def _numpy_printer_class() -> type:
+    """SymPy's NumPyPrinter, with Max and Min as nested numpy.maximum/minimum: SymPy prints them
+    with ``functools.reduce``, which the generated module (``import numpy`` only) would not have."""
+    from sympy.printing.numpy import NumPyPrinter
+
+    class _Printer(NumPyPrinter):
+        def _fold(self, expr: sp.Expr, func: str) -> str:
+            args = [self._print(a) for a in expr.args]
+            out = args[0]
+            for a in args[1:]:
+                out = f"numpy.{func}({out}, {a})"
+            return out
+
+        def _print_Max(self, expr: sp.Expr) -> str:
+            return self._fold(expr, "maximum")
+
+        def _print_Min(self, expr: sp.Expr) -> str:
+            return self._fold(expr, "minimum")
+
+    return _Printer
+
+
 def to_python_source(exprs: Any, args: Sequence[Any] | None = None, name: str = "f", *, doc: str = "",
                      imports: bool = True) -> str:
     """Source of a standalone NumPy function ``name(*args)`` evaluating ``exprs`` (scalar or Matrix).
@@ -224,8 +246,7 @@ def to_python_source(exprs: Any, args: Sequence[Any] | None = None, name: str = 
     >>> ns["g"](2.0, 0.25).round(6).tolist()
     [[0.5], [0.479426]]
     """
-    from sympy.printing.numpy import NumPyPrinter
-
+    _NumPyPrinter = _numpy_printer_class()
     flat, shape = _flat(exprs)
     _check_printable(flat)
     args = _check_args(flat, argument_order(exprs) if args is None else args)
@@ -234,7 +255,7 @@ def to_python_source(exprs: Any, args: Sequence[Any] | None = None, name: str = 
     names = _identifiers(args, _PY_RESERVED | {name})
     plain = {a: sp.Symbol(names[a]) for a in args}
     repl, reduced = sp.cse([e.xreplace(plain) for e in flat], symbols=sp.numbered_symbols("_x"))
-    printer = NumPyPrinter({"fully_qualified_modules": True, "allow_unknown_functions": False})
+    printer = _NumPyPrinter({"fully_qualified_modules": True, "allow_unknown_functions": False})
     body = [f"    {s} = {printer.doprint(e)}" for s, e in repl]
     entries = [printer.doprint(e) for e in reduced]
     if shape:

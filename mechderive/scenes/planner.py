@@ -90,17 +90,6 @@ def _free_invariants() -> Callable[..., list]:
     return _compiled("free_top.invariants", build)
 
 
-def _closed_form_estimate(solution: Any, t: np.ndarray, need: list[str], unmeasured: Callable[[], float]) -> float:
-    """The closed form's error estimate for the quantities ``need`` at ``t``, measured on this run."""
-    # MERGE: error_estimate — the closed forms provide solution.error_estimate(t, quantities) (a
-    # residual of the derived equations at the samples, scaled to an error in the output); the
-    # getattr guard and the ``unmeasured`` fallback go once they do.
-    measure = getattr(solution, "error_estimate", None)
-    if callable(measure):
-        return float(measure(t, need))
-    return float(unmeasured())
-
-
 def _heavy_drifts(p: dict, energy: Any, p_phi: Any, p_psi: Any, cos_theta: Any) -> dict[str, Drift]:
     """E, p_φ, p_ψ (3.63)-(3.65) along a heavy top's motion against scales of that motion.
 
@@ -185,11 +174,9 @@ def _heavy_exact(scene: Scene, t: np.ndarray) -> tuple[dict, dict, Any]:
     values, ps = top._evaluate(t, need)
     cols = _heavy_columns(scene.quantities, values, _heavy_parameters(scene))
 
-    def unmeasured() -> float:  # MERGE: error_estimate (the pre-measurement figure: a constant plus rounding)
-        biggest = max((float(np.max(np.abs(values[k]))) for k in ("phi", "psi") if k in values), default=0.0)
-        return 1e-13 + 4 * np.spacing(biggest)
-
-    estimate = _closed_form_estimate(top, t, need, unmeasured)
+    # measured on this run, at the very values output, from what the quantities need only
+    # (HeavyTopSolution.error_estimate: residuals of the derived equations, quadrature of the rates)
+    estimate = float(top.error_estimate(t, need))
     conditioned = None
     if any(k in need for k in ("phi", "psi", "phi_wrapped", "psi_wrapped", "phi_dot", "psi_dot")):
         # Near the pole (or the bottom) φ and ψ each are ill-conditioned — the motion itself

@@ -34,6 +34,19 @@ amplified in φ there (near the bottom likewise 1 - n₋, with φ - ψ accurate)
 and ω are well conditioned through such passages and are formed so: from the half sums and
 differences (φ ± ψ)/2, their rates, and (sin θ/2, cos θ/2); 1 - u2, 1 + u1 and the advance per
 period are computed with as many extra digits as the passage needs, and Π(n₊) from 1 - n₊ itself.
+
+Edges (issue 11; tests/test_s3_6_heavy_top_edges.py sweeps them against 30-digit references).
+sn, cn, dn are taken at the distance of the phase from the nearest turning point, formed in
+double-double (and from δ0 = v0 − turning point at the setup's precision near the start), so
+that 1 ∓ u keeps its digits next to the pole and the bottom; b ∓ a comes from the state in half
+angles (so θ0 = 1e-30 is not mistaken for a passage through the pole); φ̇ and ψ̇ are output from
+(3.74)–(3.75) in 1 ∓ u; Π(n; am r0) at the start is evaluated by the path every sample takes, so
+φ(0) = φ0.  Refused, with an :class:`~mechderive.errors.InvalidInputError` saying why: θ̇ < 0 at
+θ = 0 (θ cannot leave [0, π]; the same motion has θ̇ > 0 and φ, ψ turned by π), and motions whose
+apex comes within ~1e-75 rad of the pole or the bottom without passing through it (1 ∓ cos θ
+below 1e-150: Carlson's integrals of the passage under- or overflow in double precision).  On
+the pole (θ0 = 0) only φ + ψ and φ̇ + ψ̇ are defined; φ̇(0), ψ̇(0) are then the motion's limits.
+:meth:`HeavyTopSolution.error_estimate` measures each run's error (:mod:`.estimate`).
 """
 
 from __future__ import annotations
@@ -49,8 +62,8 @@ from ...core.validate import as_finite_array
 from ...errors import DerivationError, InvalidInputError
 from ...core.codecache import cached_lambdify
 from ...kinematics.rotations import angular_velocity_body, rotation_matrix
-from ...core.phase import DD, mod_two_pi, reduce_phase
-from ...special._doubledouble import dd_add
+from ...core.phase import DD, mod_two_pi
+from ...special._doubledouble import dd_add, two_prod
 from ...special.highprec import complete_pi_mp
 from .parameters import check_initial, check_params
 
@@ -80,10 +93,16 @@ def _nutation_functions():
         nut = em.model().nutation_constants
         return [hm.beta, em.u1, em.u2, em.u3], [nut["kappa2"], nut["m"], nut["m1"]]
 
+    def build_gaps():
+        from . import model as hm
+
+        return [*hm.PARAMETERS, *hm.STATE], list(hm.model().passage_factors)
+
     state, _ = cached_lambdify("heavy_top.constants_from_state", build_state, module="mpmath")
+    gaps, _ = cached_lambdify("heavy_top.passage_factors", build_gaps, module="mpmath")
     cubic, _ = cached_lambdify("heavy_top.f_coefficients", build_f, module="mpmath")
     nutation, _ = cached_lambdify("heavy_top.nutation_constants", build_nutation, module="mpmath")
-    return {"state": state, "f": cubic, "nutation": nutation}
+    return {"state": state, "f": cubic, "nutation": nutation, "gaps": gaps}
 
 
 @functools.cache
@@ -135,6 +154,30 @@ def _omega_half_angles():
     return cached_lambdify("heavy_top.omega_half_angles", build, module="numpy")[0]
 
 
+@functools.cache
+def _derived_rates():
+    """[φ̇, ψ̇, (φ̇ + ψ̇)/2, (φ̇ − ψ̇)/2] (3.74)–(3.75) in (I1, I3, b − a, b + a, 1 − u, 1 + u), derived.
+
+    The rates the solution outputs (:meth:`_Pass.derived_rates`): 1 ∓ u and b ∓ a enter with full
+    relative accuracy, so nothing cancels near the pole or the bottom (the partial fractions in
+    sn² have terms ~1/(1 − n₊) that cancel there).  The half sum and difference are simplified
+    symbolically, so the 1/(1 − u) spike of a near pole passage (1/(1 + u) near the bottom) is
+    absent from the one it cancels in, not cancelled in floating point.
+    """
+    def build():
+        import sympy as sp
+
+        from . import model as hm
+
+        phi_dot, psi_dot = hm.model().rates_near_poles
+        x, y = sp.symbols("x_pole y_bottom", real=True)
+        half = [sp.collect(sp.expand((phi_dot + s * psi_dot) / 2), [x, y], sp.factor) for s in (1, -1)]
+        dm, dp = sp.symbols("d_minus d_plus", real=True)
+        return [hm.I1, hm.I3, dm, dp, x, y], [phi_dot, psi_dot, *half]
+
+    return cached_lambdify("heavy_top.rates_near_poles", build, module="numpy")[0]
+
+
 @dataclass(frozen=True)
 class _Angle:
     """The closed form of one precession-type angle: start, linear part, Π terms, advance per period."""
@@ -165,21 +208,78 @@ class _Pass:
         return self._cache[key]
 
     def phase(self):
-        return self._get("phase", lambda: self.sol._phase(self.t))
+        """(j, r): v = j·2K + r, r in [0, 2K) (r rounded to a double)."""
+        return self.phase_dd()[:2]
+
+    def phase_dd(self):
+        """(j, r_hi, r_lo): the reduced phase as a double-double."""
+        return self._get("phase", lambda: self.sol._phase_dd(self.t))
 
     def jacobi(self):
         """sn, cn, dn of the reduced phase r."""
         return self.reduced_jacobi()[:3]
 
     def reduced_jacobi(self):
-        """sn, cn, dn and the half-period count of r, shared by θ (sn, cn) and Π."""
+        """sn, cn, dn of r and the half-period count j' of r = j'·2K + r', |r'| <= K, shared by θ and Π.
+
+        Each to a few ulp *relative*, also next to the turning points: sn, cn, dn are taken at the
+        distance δ of r from the nearest of 0, K, 2K (:meth:`turning`), with DLMF 22.4.iii:
+        sn(K + δ) = cd δ, cn(K + δ) = -k' sd δ, dn(K + δ) = k' nd δ; sn(2K + δ) = -sn δ,
+        cn(2K + δ) = -cn δ.  Next to the pole u2 ≈ 1, 1 - u = (1 - u2) + (u2 - u1) cn² then keeps
+        its digits; from r rounded to a double, cn near K would carry an absolute error ulp(K) — a
+        relative error 1e-16/|cn| in cn, and in φ̇, ψ̇ ∝ 1/(1 - u) (at θ0 = 1e-16 φ̇(0) came out
+        0.75 rad/s off).
+        """
         from ...special._parameter import parameter
         from ...special._sncndn import reduced_sn_cn_dn
 
         def make():
-            r = np.asarray(self.phase()[1], dtype=float)
-            return reduced_sn_cn_dn(r, parameter(self.sol.m, self.sol.m1))[:4]
+            p = parameter(self.sol.m, self.sol.m1)
+            if self.sol._period is None:  # m = 1: no period, r is the phase itself
+                _, rh, rl = self.phase_dd()
+                return reduced_sn_cn_dn(np.asarray(rh + rl, dtype=float), p)[:4]
+            kind, xh, xl = self.turning()
+            sx, cx, dx = reduced_sn_cn_dn(xh + xl, p)[:3]
+            kc = np.sqrt(p.m1 + p.m1_lo)
+            at0, atK = kind == 0, kind == 1
+            sn = np.where(at0, sx, np.where(atK, cx / dx, -sx))
+            cn = np.where(at0, cx, np.where(atK, -kc * sx / dx, -cx))
+            dn = np.where(at0, dx, np.where(atK, kc / dx, dx))
+            past_K = (kind == 2) | (atK & ((xh > 0) | ((xh == 0) & (xl > 0))))  # r = 2K + r', r' in (-K, 0]
+            return sn, cn, dn, past_K.astype(float)
         return self._get("jacobi", make)
+
+    def turning(self):
+        """(kind, x_hi, x_lo): r = kind·K + x with kind 0, 1, 2 the nearest of 0, K, 2K, x in double-double.
+
+        From the double-double phase, x is known to ~1e-32·|v| absolutely.  Near the start that is
+        not enough when θ0 is within ~1e-30 of a turning point (1 - u0 ~ 1e-60 next to the pole):
+        there x comes from w = κt + δ0, δ0 = v0 - (the turning point next to v0) computed at the
+        setup's precision with its full relative accuracy, so that x(0) = δ0 (and θ̇(0), φ̇(0)
+        are reproduced); the two agree to ~1e-32 wherever both apply.
+        """
+        def make():
+            sol = self.sol
+            j, rh, rl = self.phase_dd()
+            per = sol._period
+            Kh, Kl = 0.5 * per.hi, 0.5 * per.lo
+            kind = np.where(rh <= 0.5 * Kh, 0, np.where(rh >= 1.5 * Kh, 2, 1))
+            xh, xl = dd_add(rh, rl, -kind * Kh, -kind * Kl)
+            anchor, dv0 = sol._mp.get("anchor"), sol._mp.get("dv0")
+            if anchor is not None:
+                k = sol._kappa
+                wh, wl = two_prod(k.hi, self.t)
+                wl = wl + k.lo * self.t
+                wh, wl = dd_add(wh, wl, dv0.hi, dv0.lo)
+                small = np.abs(wh) <= 0.25 * Kh
+                w_kind = np.full(np.shape(wh), 1) if anchor else np.where((wh > 0) | ((wh == 0) & (wl >= 0)), 0, 2)
+                kind = np.where(small, w_kind, kind)
+                xh, xl = np.where(small, wh, xh), np.where(small, wl, xl)
+            return kind, xh, xl
+        # part of the Jacobi step (not listed in ``computed`` on its own)
+        if "turning" not in self._cache:
+            self._cache["turning"] = make()
+        return self._cache["turning"]
 
     def amplitude(self):
         from ...special.jacobi import jacobi_am
@@ -236,14 +336,19 @@ class _Pass:
         """
         from ...special._carlson import elliprj
 
-        sn, cn, dn = self.jacobi()
-        r = self.phase()[1]
-        K = self.sol._period.hi / 2
+        sn, cn, dn, past = self.reduced_jacobi()
+        kind, xh, xl = self.turning()
+        per = self.sol._period
+        K = per.hi / 2
         sn3 = np.abs(sn) ** 3
+        # which side of K, and r or 2K - r, from r = kind·K + x: within ulp(K) of the passage a
+        # rounded r would pick the wrong branch (an error of the whole jump 2Π(n), ~π in φ)
+        r_hi, r_lo = dd_add(kind * K, kind * 0.5 * per.lo, xh, xl)
+        rest_hi, rest_lo = dd_add(per.hi, per.lo, -r_hi, -r_lo)
         with np.errstate(all="ignore"):
             half = n / 3 * sn3 * elliprj(cn * cn, dn * dn, 1.0, cn * cn + n1 * sn * sn)
             complete = K + n / 3 * float(elliprj(0.0, self.sol.m1, 1.0, n1))
-        return np.where(r <= K, r + half, 2 * complete - ((2 * K - r) + half))
+        return np.where(past == 0, (r_hi + r_lo) + half, 2 * complete - ((rest_hi + rest_lo) + half))
 
     def half_theta(self):
         """(sin θ/2, cos θ/2) up to a common positive factor, *signed* through exact passages.
@@ -273,12 +378,14 @@ class _Pass:
                 return np.zeros(self.t.shape)
             j, r = self.phase()
             half = sol._period.hi / 2  # K: the pole at v = K (mod 2K), the bottom at v = 0 (mod 2K)
-            r0 = sol._mp["v0_reduced"]
+            # the phase at t = 0 by the same arithmetic: v0 = F(A0|m) lies in [-K, K], so its period
+            # count j0 is -1 when the start is just before a bottom passage (v0 < 0)
+            j0, r0 = (float(x[0]) for x in sol._phase(np.zeros(1)))
             count = np.zeros(self.t.shape)
             if sol._one_minus_u2 == 0.0:
-                count = count + j + (r >= half) - (r0 >= half)
+                count = count + (j + (r >= half)) - (j0 + (r0 >= half))
             if sol._one_plus_u1 == 0.0:
-                count = count + j + (r > 0) - (r0 > 0)
+                count = count + (j + (r > 0)) - (j0 + (r0 > 0))
             return count
         return self._get("passages", make)
 
@@ -292,8 +399,12 @@ class _Pass:
         sol, t = self.sol, self.t
         if sol.kind == "steady":
             return spec.start + (mod_two_pi(spec.rate, t) if reduced else spec.rate * t)
-        j, r = self.phase()
-        value = spec.start + spec.c0_over_kappa * (r - sol._v0.hi - sol._v0.lo)
+        j, rh, rl = self.phase_dd()
+        j0, r0h, r0l = sol._phase0
+        j = j - j0  # periods since t = 0; Π(n; am r0) is the terms' pi0
+        # r - r0 from the double-double phases (rh - r0h exact when close): r ~ K, whose ulp would
+        # otherwise show at t = 0 (R(0) was 18 ulp off at K = 140)
+        value = spec.start + spec.c0_over_kappa * ((rh - r0h) + (rl - r0l))
         self.pis([n for _, n, _ in spec.terms])
         for c, n, pi0 in spec.terms:
             value = value + c * (self.pi(n) - pi0)
@@ -322,9 +433,11 @@ class _Pass:
 
     def _half_angle(self, a: _Angle, b: _Angle, sign: int) -> np.ndarray:
         sol = self.sol
-        j, r = self.phase()
+        j, rh, rl = self.phase_dd()
+        j0, r0h, r0l = sol._phase0
+        j = j - j0
         c0, coeffs, pi0s = self._combined(a, b, sign)
-        value = 0.5 * (a.start + sign * b.start) + c0 * (r - sol._v0.hi - sol._v0.lo)
+        value = 0.5 * (a.start + sign * b.start) + c0 * ((rh - r0h) + (rl - r0l))
         self.pis([n for n, c in coeffs.items() if c != 0.0])
         for n, c in coeffs.items():
             if c != 0.0:
@@ -346,6 +459,22 @@ class _Pass:
         for c, n, _ in spec.terms:
             value = value + c * self._kappa_over_q(n)
         return value
+
+    def derived_rates(self) -> list[np.ndarray]:
+        """[φ̇, ψ̇, (φ̇ + ψ̇)/2, (φ̇ − ψ̇)/2] from u(t) by (3.74)–(3.75) (:func:`_derived_rates`).
+
+        At an exact passage b ∓ a = 0 and its term is absent (1 ∓ u may be 0 there).
+        """
+        def make():
+            v = self.sol._mp
+            x, y = self.one_minus_plus_u()
+            dm, dp = v["d_minus"], v["d_plus"]
+            x = np.where(x == 0, 1.0, x) if dm == 0 else x
+            y = np.where(y == 0, 1.0, y) if dp == 0 else y
+            with np.errstate(divide="ignore", invalid="ignore"):
+                out = _derived_rates()(float(v["I1"]), float(v["I3"]), dm, dp, x, y)
+            return [np.broadcast_to(np.asarray(r, dtype=float), np.shape(x)) for r in out]
+        return self._get("rates", make)
 
     def half_rate(self, a: _Angle, b: _Angle, sign: int) -> np.ndarray:
         """d/dt of :meth:`half_angle`: its combined terms, so (φ̇ + ψ̇)/2 has no n₊ term, (φ̇ - ψ̇)/2 no n₋."""
@@ -411,6 +540,12 @@ class HeavyTopSolution:
     _mp: dict = field(default_factory=dict, repr=False)  # 40-digit setup values for the lazy angle constants
 
     @functools.cached_property
+    def _phase0(self) -> tuple[float, float, float]:
+        """(j0, r0_hi, r0_lo): the reduced phase at t = 0, by the arithmetic every time goes through."""
+        j, rh, rl = self._phase_dd(np.zeros(1))
+        return float(j[0]), float(rh[0]), float(rl[0])
+
+    @functools.cached_property
     def _angles(self) -> dict[str, _Angle]:
         with mpmath.workdps(self._mp.get("dps", _DPS)):
             return _angle_setup(self)
@@ -442,7 +577,33 @@ class HeavyTopSolution:
 
     def _phase(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(j, r): v(t) = κt + v0 = j·2K + r with integer j and r in [0, 2K) (see :mod:`mechderive.core.phase`)."""
-        return reduce_phase(self._kappa, self._v0, self._period, t)
+        j, rh, rl = self._phase_dd(t)
+        return j, rh + rl
+
+    def _phase_dd(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(j, r_hi, r_lo): as :meth:`_phase` with r kept as a double-double (Dekker/Knuth
+        transformations as in :func:`mechderive.core.phase.reduce_phase`), so that the distance of
+        r to a turning point (0, K, 2K) is known to ~1e-32·|v| absolutely, not to ulp(K)."""
+        t = np.asarray(t, dtype=float)
+        k = self._kappa
+        hi, lo = two_prod(k.hi, t)
+        lo = lo + k.lo * t
+        hi, lo = dd_add(hi, lo, self._v0.hi, self._v0.lo)
+        per = self._period
+        if per is None:
+            return np.zeros_like(t), hi, lo
+        j = np.floor(hi / per.hi)
+        ph, pl = two_prod(j, per.hi)  # exact: j is an integer below 2**53
+        pl = pl + j * per.lo
+        rh, rl = dd_add(hi, lo, -ph, -pl)
+        # the floor of the rounded hi part can be off by one at a period boundary: correct it
+        for low in (rh < 0, (rh == 0) & (rl < 0)):
+            ah, al = dd_add(rh, rl, per.hi, per.lo)
+            rh, rl, j = np.where(low, ah, rh), np.where(low, al, rl), np.where(low, j - 1, j)
+        high = (rh > per.hi) | ((rh == per.hi) & (rl >= per.lo))
+        ah, al = dd_add(rh, rl, -per.hi, -per.lo)
+        rh, rl, j = np.where(high, ah, rh), np.where(high, al, rl), np.where(high, j + 1, j)
+        return j, rh, rl
 
     # --- one pass over many quantities ---------------------------------------------------------
 
@@ -466,7 +627,36 @@ class HeavyTopSolution:
         out: dict[str, np.ndarray] = {}
         for q in names:
             out[q] = self._quantity(ps, q)
+        self._mp["last_pass"] = ps  # error_estimate at the same times reuses its intermediates
         return out, ps
+
+    def error_estimate(self, t: Any, quantities: Any) -> float:
+        """The largest estimated absolute error of ``quantities`` at times ``t``, measured on this motion.
+
+        ``quantities``: names from :data:`QUANTITIES` (``u``, ``theta``, ``theta_dot``, ``phi``,
+        ``psi``, ``phi_dot``, ``psi_dot``, ``R``, ``apex``, ``omega``, …).  The value is in each
+        quantity's own units (rad, rad/s, or 1 for u, R and the apex) — the largest of them.
+        Nothing is a constant: residuals of the derived equations at the samples, the initial
+        state reproduced, the angles' increments against Gauss–Legendre quadrature of the derived
+        rates (3.74)–(3.75) along u(t), and the rounding of what is output (see
+        :mod:`.estimate`).  Only what the requested quantities need is computed: asking for θ
+        neither evaluates nor checks φ or ψ.  After :meth:`evaluate` at the same ``t`` its
+        intermediates are reused.
+
+        >>> top = exact_heavy_top(dict(I1=1.0, I3=0.5, M=0.1, g=10.0, l=1.0), dict(theta=0.5, psi_dot=5.0))
+        >>> top.error_estimate([0.0, 1.0, 2.0], ["theta"]) < 1e-14
+        True
+        """
+        from .estimate import estimate
+
+        arr = as_finite_array(t, "t")
+        names = list(quantities)
+        unknown = [q for q in names if q not in QUANTITIES]
+        if unknown:
+            raise InvalidInputError(f"unknown quantity {unknown[0]!r}: expected one of {', '.join(QUANTITIES)}")
+        last = self._mp.get("last_pass")
+        ps = last if last is not None and last.t.shape == arr.shape and np.array_equal(last.t, arr) else _Pass(self, arr)
+        return estimate(self, ps, names)
 
     def _quantity(self, ps: _Pass, q: str) -> np.ndarray:
         t = ps.t
@@ -491,6 +681,13 @@ class HeavyTopSolution:
         if q == "theta_dot":
             if steady:
                 return np.zeros(t.shape)
+            if self._one_minus_u2 == 0.0 or self._one_plus_u1 == 0.0:
+                # θ = |signed θ| folded into [0, π]: θ̇ = ±(signed θ̇), the sign flipping at each
+                # exact passage; at the passage instant itself the value just after it (the passage
+                # counts as made, as in :meth:`_Pass.passages`): away from the pole, towards the bottom
+                s, c = ps.half_theta()
+                rate = self._signed_theta_dot(ps)
+                return np.where(s == 0, np.abs(rate), np.where(c == 0, -np.abs(rate), np.sign(s) * np.sign(c) * rate))
             sn, cn, dn = ps.jacobi()
             one_minus, one_plus = ps.one_minus_plus_u()
             kappa = self._kappa.hi + self._kappa.lo
@@ -502,7 +699,9 @@ class HeavyTopSolution:
                 return x - 2 * np.pi * np.round(x / (2 * np.pi))
             return ps.angle(spec, reduced=False) + (np.pi * ps.passages() if not steady else 0.0)
         if q in ("phi_dot", "psi_dot"):
-            return ps.rate(self._angles[q[:3]])
+            if steady:
+                return np.full(t.shape, self.initial[q])
+            return ps.derived_rates()[0 if q == "phi_dot" else 1]
         if q == "R":
             if steady:
                 return rotation_matrix(ps.angle(self._angles["phi"], reduced=True), self._theta_const,
@@ -522,7 +721,7 @@ class HeavyTopSolution:
             phi, psi = self._angles["phi"], self._angles["psi"]
             s, c = ps.half_theta()
             w = _omega_half_angles()(ps.half_angle(phi, psi, +1), ps.half_angle(phi, psi, -1), s, c,
-                                     ps.half_rate(phi, psi, +1), ps.half_rate(phi, psi, -1),
+                                     ps.derived_rates()[2], ps.derived_rates()[3],
                                      self._signed_theta_dot(ps))
             return np.stack(np.broadcast_arrays(*w), axis=-1)
         raise InvalidInputError(f"unknown quantity {q!r}: expected one of {', '.join(QUANTITIES)}")
@@ -534,16 +733,19 @@ class HeavyTopSolution:
         through the bottom (u1 = -1): cos(θ/2) = ±√(amp/2) sn, so θ̇ = ∓κ√(2 amp) cn dn / sin(θ/2) likewise.
         """
         sn, cn, dn = ps.jacobi()
-        theta = self._quantity(ps, "_theta_signed")
+        s, c = ps.half_theta()
         kappa = self._kappa.hi + self._kappa.lo
         parity = 1.0 - 2.0 * np.mod(ps.phase()[0], 2.0)
         k = kappa * np.sqrt(2 * self._amp) * parity
+        norm = np.hypot(s, c)
+        if self._one_minus_u2 == 0.0 and self._one_plus_u1 == 0.0:
+            # through both (u1 = -1, u2 = 1: sin θ/2 ∝ cn, cos θ/2 ∝ sn): θ̇ = -2κ dn, with the signs
+            return -self._mp["pole_sign"] * self._mp["bottom_sign"] * 2 * kappa * dn
         if self._one_minus_u2 == 0.0:
-            return -self._mp["pole_sign"] * k * sn * dn / np.cos(theta / 2)
+            return -self._mp["pole_sign"] * k * sn * dn * norm / c
         if self._one_plus_u1 == 0.0:
-            return -self._mp["bottom_sign"] * k * cn * dn / np.sin(theta / 2)
+            return -self._mp["bottom_sign"] * k * cn * dn * norm / s
         u_dot = self._quantity(ps, "u_dot")
-        s, c = ps.half_theta()
         # sin θ = 2sc/(s² + c²): np.sin of a θ rounded next to π would lose ulp(π)/(π - θ) relative
         with np.errstate(divide="ignore", invalid="ignore"):
             return -u_dot * (s * s + c * c) / (2 * s * c)
@@ -645,6 +847,11 @@ def exact_heavy_top(parameters: Mapping[str, float], initial: Mapping[str, float
     """
     params = check_params(parameters, strict=strict)
     init = check_initial(initial)
+    if not np.ndim(init["theta"]) and init["theta"] == 0 and init["theta_dot"] < 0:
+        raise InvalidInputError(
+            f"expected theta_dot >= 0 at theta = 0 (θ in [0, π] cannot decrease from the pole; the same motion "
+            f"is theta_dot = {-init['theta_dot']:g} with phi and psi each turned by π), got theta_dot = "
+            f"{init['theta_dot']:g}")
     # (check_params realises Mgl as M = 1, g = Mgl, l = 1)
     for k, v in (("Mgl", params["g"]),) if "Mgl" in parameters else (("g", params["g"]), ("l", params["l"])):
         if not np.all(v > 0):
@@ -706,6 +913,9 @@ def _real_roots(coeffs: list, known: mpmath.mpf | None = None) -> list:
 _NEAR_PASSAGE = 1e-10
 #: No real input needs this many: b ∓ a resolved at d digits makes 1 ∓ u ≳ 10^(-2d).
 _MAX_DPS = 1000
+#: Below this, 1 - u2 (1 + u1) would be a subnormal or zero double: the evaluation forms
+#: 1 ∓ u = (1 ∓ u2) + (u2 - u1)cn² (sn²) and 1 - n± from it in double precision.
+_UNDERFLOW = 1e-150
 
 
 def _setup(params: dict, init: dict) -> HeavyTopSolution:
@@ -717,12 +927,22 @@ def _setup(params: dict, init: dict) -> HeavyTopSolution:
     I1, I3 = P[0], P[1]
     th0 = S[0]
     u0 = mpmath.cos(th0)
+    # 1 ∓ u0 of the start itself, from the half angle (cos θ0 at 40 digits is 1 for θ0 < 1e-20)
+    start_gaps = (2 * mpmath.sin(th0 / 2) ** 2, 2 * mpmath.cos(th0 / 2) ** 2)
+    _refuse_too_close(start_gaps[0], "pole")  # 1 - u2 <= 1 - u0
     energy = (I1 * (S[1] ** 2 + S[2] ** 2 * mpmath.sin(th0) ** 2) + I3 * (S[3] + S[2] * u0) ** 2) / 2 \
         + P[2] * P[3] * P[4] * u0
     coeffs = f["f"](a, b, alpha, beta)
     common = dict(parameters=dict(params), initial=dict(init), energy=float(energy), p_phi=float(I1 * b),
                   p_psi=float(I1 * a), f_coefficients=tuple(float(c) for c in coeffs))
-    u_1, u_2, u_3 = _real_roots(coeffs, known=u0 if S[1] == 0 else None)
+    d_pole, d_bottom = f["gaps"](*P, *S)
+    # a root known exactly deflates the cubic, and the other two come from a quadratic without loss:
+    # ±1 at an exact passage (f(±1) = -(b ∓ a)², 3.76), u0 for a start at a turning point (θ̇0 = 0).
+    # Otherwise a near double root u2 ≈ u3 (next to the separatrix) is only found to the square
+    # root of the working precision (m1 = 1.2e-21 came out for 1e-76 at 40 digits: θ 1e-8 for 1e-36)
+    known = mp(1) if d_pole == 0 else mp(-1) if d_bottom == 0 else u0 if S[1] == 0 else None
+    u_1, u_2, u_3 = _real_roots(coeffs, known=known)
+    separated = known is not None and known in (u_2, u_3)  # u3 - u2 then to the working precision
     # u0 lies in [u1, u2] up to the roots' own accuracy (40 digits); snap it in, and keep the
     # turning points in [-1, 1] (a root at ±1 can come out as ±(1 + 4e-40)).
     u_2, u_1 = min(max(u_2, u0), mp(1)), max(min(u_1, u0), mp(-1))
@@ -733,14 +953,36 @@ def _setup(params: dict, init: dict) -> HeavyTopSolution:
     # numbers: redo the setup with as many more digits as 1 ∓ u has leading zeros.  f(±1) = -(b ∓ a)²
     # (3.73): the apex reaches the pole (bottom) only if b = a (b = -a); a root at ±1 with b ∓ a ≠ 0
     # means the working digits could not resolve 1 ∓ u (~(b ∓ a)²) at all: double them first.
-    gaps = ((1 - u_2, b - a), (1 + u_1, b + a))
+    # b ∓ a from the state in the half angle (model.passage_factors): zero exactly when the apex
+    # passes through the pole (bottom), and resolved at any precision when it only comes near
+    # (b - a from a and b would be 0 at 40 digits for θ0 = 1e-30, posing as an exact passage)
+    # an exact passage: ±1 is a root of f (3.76) exactly; the nearest computed root is it
+    if d_pole == 0:
+        if abs(u_3 - 1) < abs(u_2 - 1):
+            u_3 = mp(1)
+        else:
+            u_2 = mp(1)
+    if d_bottom == 0:
+        u_1 = mp(-1)
+    gaps = ((1 - u_2, d_pole), (1 + u_1, d_bottom))
     if any(g == 0 and d != 0 for g, d in gaps):
         if mpmath.mp.dps >= _MAX_DPS:
             raise DerivationError(f"expected 1 - u2 and 1 + u1 resolved within {_MAX_DPS} digits, got a root at "
                                   f"±1 with b ∓ a = {mpmath.nstr(b - a, 3)}, {mpmath.nstr(b + a, 3)}")
         with mpmath.workdps(2 * mpmath.mp.dps):
             return _setup(params, init)
-    near = [g for g, _ in gaps if g > 0]
+    near = [g for g in (*(g for g, _ in gaps), *start_gaps) if g > 0]
+    # next to the separatrix (u3 - u2 → 0, m → 1): u3 - u2 to ~40 digits as well, which takes
+    # twice its leading zeros when u2 and u3 are a near double root of one solve
+    sep = u_3 - u_2
+    if 0 < sep < _NEAR_PASSAGE:
+        near.append(sep if separated else sep**2)
+    elif sep == 0 and u_2 - u_1 > 0 and S[1] != 0:
+        # u2 = u3 is a sleeping top at the stability threshold — not a moving one: unresolved
+        if mpmath.mp.dps >= _MAX_DPS:
+            raise DerivationError(f"expected u3 - u2 resolved within {_MAX_DPS} digits, got 0")
+        with mpmath.workdps(2 * mpmath.mp.dps):
+            return _setup(params, init)
     if near and min(near) < _NEAR_PASSAGE:
         # (a gap below 10^-dps is only an upper bound: the next pass measures it again)
         needed = _DPS + int(mpmath.ceil(-mpmath.log10(min(near))))
@@ -749,6 +991,8 @@ def _setup(params: dict, init: dict) -> HeavyTopSolution:
                 raise DerivationError(f"expected 1 ∓ u resolved within {_MAX_DPS} digits, got {min(near)}")
             with mpmath.workdps(needed):
                 return _setup(params, init)
+    for (g, _), where in zip(gaps, ("pole", "bottom")):
+        _refuse_too_close(g, where)
     amp = u_2 - u_1
     scale = mp(10) ** (-mpmath.mp.dps + 8)
     roots_f = (float(u_1), float(u_2), float(u_3))
@@ -757,16 +1001,30 @@ def _setup(params: dict, init: dict) -> HeavyTopSolution:
             kind="steady", roots=roots_f, m=0.0, m1=1.0, nutation_period=float("nan"), conditioning=1.0,
             motion_class="uniform precession", _kappa=DD(0.0, 0.0), _v0=DD(0.0, 0.0), _period=None,
             _u1=float(u0), _amp=0.0, _one_minus_u2=float(1 - u0), _one_plus_u1=float(1 + u0),
-            _theta_const=float(th0), _mp=dict(steady=True), **common)
+            _theta_const=float(th0), _mp=dict(steady=True, beta=float(beta), d_minus=float(d_pole),
+                                              d_plus=float(d_bottom)), **common)
     roots = (u_1, u_2, u_3)
     kappa2, m, m1 = f["nutation"](beta, *roots)
+    if m1 < _UNDERFLOW:
+        raise InvalidInputError(
+            f"expected the motion at least 1e-150 from the separatrix (1 - m >= 1e-150: the nutation period "
+            f"~ln(1/(1 - m)) and the Jacobi functions take 1 - m as a double), got 1 - m = {mpmath.nstr(m1, 3)}: "
+            f"integrate_heavy_top follows such a motion")
     kappa = mpmath.sqrt(kappa2)
     s0 = min(max((u0 - u_1) / amp, mp(0)), mp(1))
     u_dot0 = -mpmath.sin(th0) * S[1]
     A0 = mpmath.sign(u_dot0) * mpmath.asin(mpmath.sqrt(s0)) if u_dot0 != 0 else \
         (mpmath.pi / 2 if s0 > mp(1) / 2 else mp(0))
-    v0 = mpmath.ellipf(A0, m)
     K = mpmath.ellipk(m) if m1 != 0 else mpmath.inf
+    # v0 = F(A0|m) as (the turning point next to it) + δ0, δ0 with its full relative accuracy: past
+    # A0 = π/4, F(A0|m) = K - F(χ|m) with tan χ = cot A0 / k' (DLMF 19.7.8), cos A0 = √((u2 - u0)/amp)
+    if abs(A0) > mpmath.pi / 4 and m1 != 0:
+        anchor = int(mpmath.sign(A0))
+        chi = mpmath.atan2(mpmath.sqrt((u_2 - u0) / amp), mpmath.sqrt(m1) * mpmath.sqrt(s0))
+        dv0 = -anchor * mpmath.ellipf(chi, m)
+    else:
+        anchor, dv0 = 0, mpmath.ellipf(A0, m)
+    v0 = anchor * K + dv0 if m1 != 0 else dv0
     period = None if m1 == 0 else DD.of(2 * K)
     n_plus = (u_2 - u_1) / (1 - u_1) if u_1 < 1 else mp(0)
     n_minus = -(u_2 - u_1) / (1 + u_1) if u_1 > -1 else -mpmath.inf
@@ -778,11 +1036,29 @@ def _setup(params: dict, init: dict) -> HeavyTopSolution:
         _kappa=DD.of(kappa), _v0=DD.of(v0), _period=period, _u1=float(u_1), _amp=float(amp),
         _one_minus_u2=float(1 - u_2), _one_plus_u1=float(1 + u_1), _theta_const=float(th0),
         _mp=dict(steady=False, I1=I1, I3=I3, a=a, b=b, roots=roots, kappa=kappa, m=m, m1=m1, A0=A0, K=K,
-                 v0_reduced=float(v0 - 2 * K * mpmath.floor(v0 / (2 * K))) if period is not None else float(v0),
+                 anchor=anchor if period is not None else None, dv0=DD.of(dv0),
+                 # for the error estimate: 1 ∓ u_k to full relative accuracy, b ∓ a, β
+                 gaps_minus=tuple(float(1 - r) for r in roots), gaps_plus=tuple(float(1 + r) for r in roots),
+                 d_minus=float(d_pole), d_plus=float(d_bottom), beta=float(beta),
                  # sn v0 = sin A0, cn v0 = cos A0 exactly (v0 = F(A0|m), DLMF 22.16.1)
                  pole_sign=_passage_sign(mpmath.cos(A0), -mpmath.sin(A0), S[1]),
                  bottom_sign=_passage_sign(mpmath.sin(A0), mpmath.cos(A0), -S[1]),
                  scale=scale, dps=mpmath.mp.dps), **common)
+
+
+def _refuse_too_close(gap, where: str) -> None:
+    """Raise unless 1 ∓ u at the closest approach to the pole (bottom), ``gap``, is 0 or ≥ :data:`_UNDERFLOW`.
+
+    Below it Carlson's R_J of the passage (~1/√(gap)·1/gap) under- or overflows in double
+    precision; the motion is then within ~1e-75 rad of the pole, where φ and ψ individually turn
+    by O(1) in a time that no double resolves — a steady approximation would be wrong for them.
+    """
+    if 0 < gap < _UNDERFLOW:
+        raise InvalidInputError(
+            f"expected the apex to stay at least ~1e-75 rad from the {where} unless it passes through it exactly "
+            f"(1 ∓ cos θ ≥ 1e-150: below, Carlson's integrals of the passage under- or overflow in double "
+            f"precision), got a motion coming within {mpmath.nstr(mpmath.sqrt(2 * gap), 3)} rad of it: use theta = "
+            f"{'0' if where == 'pole' else 'pi'} for the {where} itself, or integrate_heavy_top")
 
 
 def _passage_sign(value, slope, theta_dot) -> float:
@@ -834,30 +1110,25 @@ def _angle_setup(sol: HeavyTopSolution) -> dict[str, _Angle]:
 
     The partial-fraction coefficients and the advance per nutation period come from 40-digit
     arithmetic (more near a passage, see :func:`_setup`): the advance multiplies the period count
-    j, so its double rounding would grow like j·ulp.  Π(n; am v0 | m) is double precision, except
-    for n close to 1, where it is taken at the working precision (1 - n keeps its digits).
+    j, so its double rounding would grow like j·ulp.  Π(n; am r0 | m) at the start is evaluated as
+    every sample's Π is (double precision, from the phase at t = 0).
     """
-    from ...special.integrals import elliptic_pi_incomplete
-
     if sol.kind == "steady":
         return {k: _Angle(k, sol.initial[k], 0.0, (), None, sol.initial[k + "_dot"]) for k in ("phi", "psi")}
     v = sol._mp
-    kappa, A0, m = v["kappa"], v["A0"], v["m"]
+    kappa = v["kappa"]
     fractions = sol._angle_fractions
     # φ and ψ share their characteristics n±: one vectorised Π call for all of them
     ns = sorted({n for _, kept in fractions.values() for _, n in kept})
-    far = [n for n in ns if 1 - n >= mpmath.mpf("1e-3")]
     for n in ns:
         sol._mp.setdefault("one_minus_n", {})[float(n)] = float(1 - n)  # to full relative accuracy
-    pi0 = {n: float(mpmath.ellippi(n, A0, m)) for n in ns if n not in far}  # near the pole: 1 - n keeps its digits
-    series = sol._pi_series() if far else None
-    if series is not None:
-        # Π(n; am v0 | m) from the same series the samples use: φ(0) = φ0 to rounding
-        at_v0 = series(np.array([sol._v0.hi + sol._v0.lo]))[:, 0]
-        pi0.update((n, float(at_v0[series.n.tolist().index(float(n))])) for n in far)
-    elif far:
-        n_far = np.array([float(n) for n in far])
-        pi0.update(zip(far, np.atleast_1d(elliptic_pi_incomplete(n_far, float(A0), sol.m, m1=sol.m1)).tolist()))
+    # Π(n; am r0 | m) at the phase of t = 0 by the very path every sample takes: φ(0) = φ0 and
+    # ψ(0) = ψ0 to rounding, also where Π is huge (n → 1 near the pole, ~1/√(1 - n)) or
+    # ill-conditioned in the amplitude (m → 1: Π(n; A | m) from a rounded A0 next to π/2 erred
+    # 7e-12 at m1 = 3e-13, and φ(0) with it)
+    at_start = _Pass(sol, np.zeros(1))
+    at_start.pis([float(n) for n in ns])
+    pi0 = {n: float(at_start.pi(float(n))[0]) for n in ns}
     out = {}
     for name in ("phi", "psi"):
         c0, kept = fractions[name]

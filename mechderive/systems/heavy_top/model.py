@@ -279,6 +279,27 @@ class HeavyTopModel(LagrangianModel):
         return _over_one_minus_u2(_in_u(self.spin_rate_theta))
 
     @derived
+    def rates_near_poles(self) -> tuple[sp.Expr, sp.Expr]:
+        """(φ̇, ψ̇) of (3.74)–(3.75) in x = 1 − u, y = 1 + u and d∓ = b ∓ a: their partial fractions in u.
+
+        Formed so in floating point, nothing cancels near the pole or the bottom: 1 ∓ u enter
+        themselves (not 1 − u² from a rounded u), and b − a (tiny near a pole passage) as a number
+        known to full relative accuracy.  Symbols ``x_pole y_bottom d_minus d_plus`` (real).
+        """
+        x, y, dm, dp = sp.symbols("x_pole y_bottom d_minus d_plus", real=True)
+        out = []
+        for rate in (self.precession_rate_u, self.spin_rate_u):
+            parts = sp.apart(sp.together(rate), u).xreplace({u - 1: -x, u + 1: y})
+            parts = sp.expand(parts.subs({a: (dp - dm) / 2, b: (dp + dm) / 2}))
+            if parts.has(u):
+                raise DerivationError(f"expected the rate in 1 − u and 1 + u only, got {parts}")
+            back = parts.subs({x: 1 - u, y: 1 + u, dm: b - a, dp: b + a})
+            if sp.cancel(sp.together(back - rate)) != 0:
+                raise DerivationError(f"expected the partial fractions to reproduce {rate}, got {parts}")
+            out.append(sp.collect(parts, [x, y], sp.factor))
+        return tuple(out)  # type: ignore[return-value]
+
+    @derived
     def f_at_poles(self) -> tuple[sp.Expr, sp.Expr]:
         """(f(1), f(−1)) (3.76), factored."""
         return tuple(sp.factor(self.f_u.subs(u, x)) for x in (1, -1))  # type: ignore[return-value]
@@ -316,6 +337,28 @@ class HeavyTopModel(LagrangianModel):
         """Compiled ``f(I1, I3, M, g, l, theta, theta_dot, phi_dot, psi_dot)`` → shape (..., 3): (E, p_φ, p_ψ)."""
         exprs = [self.energy, self.azimuthal_momentum, self.spin_momentum]
         return self.compile("invariants", exprs, [*PARAMETERS, *STATE])
+
+    @derived
+    def passage_factors(self) -> tuple[sp.Expr, sp.Expr]:
+        """(b − a, b + a) of (3.66) in the state with θ = 2h, as 2 sin²h·(…)/I1 and 2 cos²h·(…)/I1.
+
+        f(±1) = −(b ∓ a)² (3.76): the apex reaches the pole (bottom) only if b = a (b = −a).
+        Next to the pole b − a is a difference of nearly equal numbers, p_φ/I1 − I3ω3/I1 with
+        1 − cos θ lost; in this form its factor sin²(θ/2) carries θ's smallness with full relative
+        accuracy (and cos²(θ/2) next to the bottom), so that whether b ∓ a is zero, and how small,
+        can be told from the state at any working precision.  Checked equal to b ∓ a.
+        """
+        h = sp.Symbol("h", real=True)
+        c = self.constants_from_state
+        out = []
+        for sign in (-1, 1):
+            expr = c[b] + sign * c[a]
+            in_h = sp.expand_trig(expr.subs(theta, 2 * h))
+            half = sp.factor(sp.trigsimp(sp.factor(in_h)))
+            if sp.expand(simplify_trig(half - in_h)) != 0:
+                raise DerivationError(f"expected b {'+' if sign > 0 else '−'} a in the half angle, got {half}")
+            out.append(half.subs(h, theta / 2))
+        return tuple(out)  # type: ignore[return-value]
 
     # --- (3.77)-(3.78): letting the top go ----------------------------------------------------
 
@@ -390,21 +433,61 @@ class HeavyTopModel(LagrangianModel):
 
     @derived
     def precession_rates(self) -> tuple[sp.Expr, sp.Expr]:
-        """(slow, fast): the two roots φ̇ of (3.80), named for cos θ0 > 0 and ω3 > 0 (slow < fast).
+        """(slow, fast): the two roots φ̇ of (3.80), slow the one of smaller |φ̇|, in a form free of cancellation.
 
-        For cos θ0 < 0 (a hanging top) the two are real for every spin and of opposite signs.
+        (3.80) is A φ̇² + B φ̇ + C = 0 (A = −I1 cos θ0, B = I3 ω3, C = −M g l, read off the derived
+        polynomial).  The textbook (−B ± √disc)/(2A) subtracts nearly equal numbers for the slow
+        root whenever 4AC ≪ B² — a fast spin, or θ0 near π/2, where A → 0 (in floating point it
+        gave φ̇_slow = 0 for the horizontal gyroscope instead of M g l/(I3 ω3)).  With
+        q = −(B + s √disc)/2, s = ±1 the sign of B (+1 at B = 0), the roots are C/q and q/A (their
+        product is C/A, Vieta), and B + s √disc adds two numbers of one sign.  C/q is the slow
+        root: |q|² ≥ |AC| (checked below by algebra).  At cos θ0 = 0 (3.80) is linear and C/q is
+        its root M g l/(I3 ω3); the fast root is then infinite (q/A with A = 0).
+
+        For ω3 > 0 (and any θ0) these are the textbook's (B ∓ √disc)/(2 I1 cos θ0), in that
+        order; for cos θ0 < 0 (a hanging top) the two are real for every spin and of opposite signs.
         """
-        roots = list(sp.roots(self.uniform_precession_polynomial))
-        if len(roots) != 2:
-            raise DerivationError(f"expected two precession rates, got {roots}")
-        slow, fast = sorted(roots, key=lambda r: sp.N(r.subs(_SAMPLE)))
-        return slow, fast
+        poly = self.uniform_precession_polynomial
+        if poly.degree() != 2:
+            raise DerivationError(f"expected (3.80) quadratic in φ̇, got {poly}")
+        A, B, C = poly.all_coeffs()
+        disc = self.precession_discriminant
+        if sp.expand(disc - (B**2 - 4 * A * C)) != 0:
+            raise DerivationError(f"expected the discriminant B² − 4AC, got {disc}")
+        s = sp.Symbol("s")
+        q = -(B + s * sp.sqrt(disc)) / 2
+        slow, fast = -C / -q, -q / -A  # (−C, −A, −q > 0 for a top above the horizontal spinning ω3 > 0)
+        for sign in (1, -1):
+            for r in (slow, fast):
+                # each a root of A φ̇² + B φ̇ + C for either sign (with √disc² = disc)
+                if sp.expand(sp.numer(sp.together(poly.as_expr().subs(phi_dot, r.subs(s, sign))))) != 0:
+                    raise DerivationError(f"expected {r} (s = {sign}) to solve (3.80)")
+        # slow has the smaller modulus: |q|² − |AC| = ((|B| + √disc)² − 4|AC|)/4 ≥ 0 since
+        # √disc ≥ 0 and disc = B² − 4AC ≥ B² − 4|AC|; checked for the symbols as positive numbers
+        x, y, w = sp.symbols("x y w", nonnegative=True)  # |B|, √disc, 4|AC| with y² ≥ x² − w
+        if not sp.expand(((x + y) ** 2 - w) - (x**2 - w) - (y**2 + 2 * x * y)) == 0:
+            raise DerivationError("expected |q|² ≥ |AC|")
+        # the sign of B = I3 ω3 is that of its factors not known positive (ω3)
+        sign_B = sp.Piecewise((1, sp.Mul(*[f for f in sp.Mul.make_args(B) if not f.is_positive]) >= 0), (-1, True))
+        return slow.subs(s, sign_B), fast.subs(s, sign_B)
 
     @derived
     def minimum_spin(self) -> sp.Expr:
-        """(3.81): the ω3 > 0 at which the discriminant vanishes, for cos θ0 > 0: (2/I3)√(M g l I1 cos θ0)."""
-        roots = sp.solve(self.precession_discriminant, omega3)
-        return _positive_at_sample(roots)
+        """(3.81): the least spin ω3 ≥ 0 with real precession rates, (2/I3)√(M g l I1 max(cos θ0, 0)).
+
+        For cos θ0 > 0 the ω3 > 0 at which the discriminant vanishes.  For cos θ0 ≤ 0 (a top at or
+        below the horizontal) the discriminant I3²ω3² − 4 I1 M g l cos θ0 is ≥ 0 at every spin
+        (checked: its value at ω3 = 0 is a positive multiple of −cos θ0, and it grows with ω3²),
+        so any spin is enough and the minimum is 0 — the same root with cos θ0 replaced by
+        max(cos θ0, 0), continuous at θ0 = π/2.
+        """
+        disc = self.precession_discriminant
+        at_rest = sp.factor(disc.subs(omega3, 0))
+        k = sp.Symbol("k", positive=True)
+        if not (sp.expand(disc - at_rest).subs(omega3, k).is_positive and at_rest.subs(sp.cos(theta0), -k).is_positive):
+            raise DerivationError(f"expected the discriminant ≥ 0 for cos θ0 ≤ 0 at any spin, got {disc}")
+        root = _positive_at_sample(sp.solve(disc, omega3))
+        return root.subs(sp.cos(theta0), sp.Max(sp.cos(theta0), 0))
 
     # --- (3.82)-(3.83): the sleeping top -----------------------------------------------------
 
