@@ -180,6 +180,7 @@ def test_near_pole_scene_phi_is_right_to_its_measured_estimate():
     assert run.report["method"] == "exact" and run.solution.conditioning > 1e9
     ref = heavy_reference(scene.parameters, scene.initial, run.t)
     err_phi = np.max(np.abs(np.angle(np.exp(1j * (run.columns["phi"] - ref.angles[:, 0])))))
-    err_R = max(np.max(np.abs(run.columns["R11"] - ref.R[:, 0, 0])), np.max(np.abs(run.columns["R23"] - ref.R[:, 1, 2])))
+    err_R = max(np.max(np.abs(run.columns["R11"] - ref.R[:, 0, 0])),
+                np.max(np.abs(run.columns["R23"] - ref.R[:, 1, 2])))
     assert max(err_phi, err_R) <= run.report["error_estimate"]
     assert run.report["rtol_met"] is (run.report["error_estimate"] <= scene.rtol)

@@ -103,7 +103,10 @@ def _nearest_arguments(q: np.ndarray, near: tuple[float, float]) -> tuple[float,
     """The arguments of q0 + i q3 and q1 + i q2 nearest ``near`` (a zero pair keeps its ``near``)."""
     out = []
     for (x, y), a in zip(((q[0], q[3]), (q[1], q[2])), near):
-        out.append(a if x == 0.0 and y == 0.0 else a + float(np.remainder(np.arctan2(y, x) - a + np.pi, 2 * np.pi) - np.pi))
+        if x == 0.0 and y == 0.0:
+            out.append(a)
+        else:
+            out.append(a + float(np.remainder(np.arctan2(y, x) - a + np.pi, 2 * np.pi) - np.pi))
     return out[0], out[1]
 
 
