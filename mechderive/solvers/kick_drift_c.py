@@ -113,15 +113,9 @@ class CompiledSplitting:
         :func:`mechderive.systems.free_top.integrate._interval_steps` gives; ``weights`` the
         composition weights (order 2, 4 or 6).
         """
-        head, stages = kdk_schedule(weights)
-        y0 = np.ascontiguousarray(y0, dtype=float)
-        par = np.ascontiguousarray(params, dtype=float)
-        counts = np.ascontiguousarray([n for n, _ in intervals], dtype=np.int64)
-        steps = np.ascontiguousarray([h for _, h in intervals], dtype=float)
-        drift = np.ascontiguousarray([d for d, _ in stages], dtype=float)
-        kick = np.ascontiguousarray([k for _, k in stages], dtype=float)
+        args = _c_arguments(y0, params, intervals, weights)
         out = np.empty((len(intervals) + 1, self.n))
-        self._run(y0, par, len(intervals), counts, steps, float(head), len(stages), drift, kick, out)
+        self._run(*args, out)
         return out
 
     def propagate_recorded(self, y0: Sequence[float], params: Sequence[float], intervals: Sequence[tuple[int, float]],
@@ -130,15 +124,9 @@ class CompiledSplitting:
         shape (1 + Σ n, n), row 0 ``y0``; within an interval the row between two steps is the end of
         the first followed by the leading kick of the next (merged with it by the chaining), at the
         interval's end its end."""
-        head, stages = kdk_schedule(weights)
-        y0 = np.ascontiguousarray(y0, dtype=float)
-        par = np.ascontiguousarray(params, dtype=float)
-        counts = np.ascontiguousarray([n for n, _ in intervals], dtype=np.int64)
-        steps = np.ascontiguousarray([h for _, h in intervals], dtype=float)
-        drift = np.ascontiguousarray([d for d, _ in stages], dtype=float)
-        kick = np.ascontiguousarray([k for _, k in stages], dtype=float)
-        out = np.empty((1 + int(counts.sum()), self.n))
-        self._record(y0, par, len(intervals), counts, steps, float(head), len(stages), drift, kick, out)
+        args = _c_arguments(y0, params, intervals, weights)
+        out = np.empty((1 + sum(n for n, _ in intervals), self.n))
+        self._record(*args, out)
         return out
 
 
@@ -162,3 +150,14 @@ def compiled_splitting(name: str, build: Callable[[], tuple]) -> CompiledSplitti
     rec.argtypes = [vec, vec, ctypes.c_int, longs, vec, ctypes.c_double, ctypes.c_int, vec, vec, vec]
     rec.restype = None
     return CompiledSplitting(name=name, n=int(dims[0]), n_par=int(dims[1]), _run=fn, _record=rec)
+
+
+def _c_arguments(y0: Sequence[float], params: Sequence[float], intervals: Sequence[tuple[int, float]],
+                 weights: Sequence[float]) -> tuple:
+    """The C driver's arguments before ``out``: state, parameters, the intervals and the stage schedule."""
+    head, stages = kdk_schedule(weights)
+    return (np.ascontiguousarray(y0, dtype=float), np.ascontiguousarray(params, dtype=float), len(intervals),
+            np.ascontiguousarray([n for n, _ in intervals], dtype=np.int64),
+            np.ascontiguousarray([h for _, h in intervals], dtype=float), float(head), len(stages),
+            np.ascontiguousarray([d for d, _ in stages], dtype=float),
+            np.ascontiguousarray([k for _, k in stages], dtype=float))
