@@ -184,12 +184,12 @@ def test_ctrl_c_while_writing_leaves_no_file(monkeypatch, capsys, tmp_path, suff
     """Interrupted halfway through the table: no file, no temporary file; an old table survives intact."""
     real_write = output._write_atomically
 
-    def interrupted(path, write):
+    def interrupted(path, write, *rest):
         def half(f):
             f.write(b"t,omega1\n0.0,")  # some bytes reach the temporary file first
             raise KeyboardInterrupt
 
-        real_write(path, half)
+        real_write(path, half, *rest)
 
     monkeypatch.setattr(output, "_write_atomically", interrupted)
     target = tmp_path / f"out{suffix}"
@@ -223,11 +223,11 @@ def test_debug_variable_prints_the_traceback(monkeypatch, capsys, scene):
 
 @pytest.mark.parametrize("argv, message", [
     (["-o", "{tmp}/missing/out.csv"],
-     r"output file '.*missing/out\.csv': expected an existing directory, got '.*missing'"),
-    (["-o", "{tmp}/out.txt"], r"output file '.*out\.txt': expected a suffix \.csv or \.npz, got '\.txt'"),
-    (["-o", "{tmp}/dir.csv"], r"output file '.*dir\.csv': expected a file name, got a directory"),
-    (["--plot", "{tmp}/out.jpg"], r"plot file '.*out\.jpg': expected a suffix \.png, \.pdf, \.svg, got '\.jpg'"),
-    (["--plot", "{tmp}/missing/out.png"], r"plot file '.*out\.png': expected an existing directory"),
+     r"-o '.*missing/out\.csv': expected an existing directory, got '.*missing'"),
+    (["-o", "{tmp}/out.txt"], r"-o '.*out\.txt': expected a suffix \.csv or \.npz, got '\.txt'"),
+    (["-o", "{tmp}/dir.csv"], r"-o '.*dir\.csv': expected a file name, got a directory"),
+    (["--plot", "{tmp}/out.jpg"], r"--plot '.*out\.jpg': expected a suffix \.png, \.pdf, \.svg, got '\.jpg'"),
+    (["--plot", "{tmp}/missing/out.png"], r"--plot '.*out\.png': expected an existing directory"),
 ])
 def test_bad_output_target_refused_before_solving(monkeypatch, capsys, tmp_path, argv, message, scene):
     import re
@@ -249,7 +249,7 @@ def test_unwritable_directory_refused(tmp_path, monkeypatch):
         real_access = os.access
         monkeypatch.setattr(os, "access", lambda path, mode, *a, **k: False if os.fspath(path) == os.fspath(locked)
                             and mode & os.W_OK else real_access(path, mode, *a, **k))
-    with pytest.raises(InvalidInputError, match=r"expected a directory you can write to, got '.*locked'"):
+    with pytest.raises(InvalidInputError, match=r"expected a directory you may write to, got '.*locked'"):
         output.check_output_path(locked / "out.csv", output.TABLE_SUFFIXES)
 
 

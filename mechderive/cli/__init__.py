@@ -11,10 +11,14 @@ Exit status (the same for every subcommand; some add their own, e.g. ``check``'s
 0     success
 1     a check that was run did not pass (``verify``, ``stress``; ``check``: false)
 2     bad input: a usage error, or a :class:`~mechderive.errors.MechDeriveError`, printed
-      as one line ``mechderive: error: <what was wrong and what is allowed>``
+      as one line ``mechderive: error: <what was wrong and what is allowed>``; also an output
+      that could not be written (``-o`` on a full disk, stdout on a full disk)
 70    an internal error (a bug): one line naming the exception (EX_SOFTWARE of sysexits.h)
 130   interrupted by Ctrl-C (128 + SIGINT, what a shell reports for a process killed by it)
 141   stdout was closed early, e.g. ``mechderive run --json | head -1`` (128 + SIGPIPE)
+143   terminated by SIGTERM while an output file was being written (129: SIGHUP); the
+      temporary file was removed first (:class:`mechderive.scenes.output.Terminated`).
+      At any other moment these signals end the run as they end any process.
 ====  =====================================================================================
 
 No traceback is printed for any of these unless ``MECHDERIVE_DEBUG=1`` is set in the
@@ -29,12 +33,14 @@ before it can remove the temporary file of an output being written.
 from __future__ import annotations
 
 import argparse
+import errno
 import os
 import sys
 from typing import Sequence
 
 from .. import __version__
 from ..errors import MechDeriveError
+from ..scenes.output import Terminated
 
 __all__ = ["main", "build_parser", "parse_args", "EXIT_INPUT", "EXIT_INTERNAL", "EXIT_INTERRUPTED", "EXIT_PIPE"]
 
@@ -44,14 +50,31 @@ EXIT_INTERRUPTED = 130
 EXIT_PIPE = 141
 
 _DEBUG_VARIABLE = "MECHDERIVE_DEBUG"
+# Errors of a write that found no room: the output is lost, but mechderive did nothing wrong.
+_DISK_FULL = frozenset(getattr(errno, name) for name in ("ENOSPC", "EDQUOT", "EFBIG") if hasattr(errno, name))
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse's parser, except that help and version text that cannot be written is an error.
+
+    argparse drops an :class:`OSError` while printing (``mechderive --help | head -1``,
+    ``--help > /dev/full``) and exits 0; on stdout it now reaches :func:`main`, which
+    answers 141 or status 2 as for any other output.  Subcommand parsers inherit the class.
+    """
+
+    def _print_message(self, message: str, file=None) -> None:  # type: ignore[override]
+        if message and file is sys.stdout:
+            sys.stdout.write(message)
+        else:
+            super()._print_message(message, file)
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="mechderive",
         description="Derive, verify and simulate the motion of rigid bodies.",
         epilog=f"Exit status: 0 success, 1 a check did not pass, 2 bad input, 70 internal error, "
-               f"130 interrupted, 141 output pipe closed.  {_DEBUG_VARIABLE}=1 prints tracebacks.",
+               f"130 interrupted, 141 output pipe closed, 143 terminated.  {_DEBUG_VARIABLE}=1 prints tracebacks.",
     )
     parser.add_argument("--version", action="version", version=f"mechderive {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
@@ -139,8 +162,40 @@ def _flush_stdout_quietly() -> None:
         pass
 
 
+def _stdout_unwritable() -> BaseException | None:
+    """The error that flushing stdout raises now, if any (a full disk keeps failing)."""
+    try:
+        sys.stdout.flush()
+    except (OSError, ValueError) as exc:
+        return exc
+    return None
+
+
+def _internal_error(exc: BaseException) -> int:
+    _flush_stdout_quietly()
+    _traceback_if_debugging()
+    message = str(exc).strip().splitlines()[0] if str(exc).strip() else "(no message)"
+    hint = "" if _debug() else f"; {_DEBUG_VARIABLE}=1 shows the traceback"
+    _say(f"mechderive: internal error: {type(exc).__name__}: {message} -- this is a bug in mechderive, "
+         f"please report it to its maintainers with the command line{hint}")
+    return EXIT_INTERNAL
+
+
+def _output_failed(exc: OSError) -> int:
+    """Standard output could not be written (a full disk, a quota): one line, status 2."""
+    _traceback_if_debugging()
+    _stdout_to_devnull()  # or the interpreter's final flush fails once more
+    _say(f"mechderive: error: standard output: could not write it: {exc.strerror or exc}")
+    return EXIT_INPUT
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``mechderive`` console script; returns the exit status (module docstring)."""
+    """Entry point of the ``mechderive`` console script; returns the exit status (module docstring).
+
+    argparse's own exits (``--help``, ``--version``, usage errors) still raise
+    :class:`SystemExit`, after their output has been flushed; if that output met a closed
+    pipe the status is 141 instead.
+    """
     try:
         parser = build_parser()
         args = parse_args(parser, sys.argv[1:] if argv is None else argv)
@@ -163,18 +218,34 @@ def main(argv: Sequence[str] | None = None) -> int:
         _traceback_if_debugging()
         _say("mechderive: interrupted")
         return EXIT_INTERRUPTED
+    except Terminated as exc:
+        _flush_stdout_quietly()
+        _traceback_if_debugging()
+        _say("mechderive: terminated; the output file being written was removed")
+        return int(exc.code)
+    except SystemExit:
+        # argparse printed help, a version or a usage error and exits: flush here, where a
+        # closed pipe or a full disk can still be reported, not in the interpreter's last flush.
+        failed = _stdout_unwritable()
+        if isinstance(failed, BrokenPipeError):
+            _stdout_to_devnull()
+            return EXIT_PIPE
+        if isinstance(failed, OSError):
+            return _output_failed(failed)
+        raise
     except BrokenPipeError:
         _traceback_if_debugging()
         _stdout_to_devnull()
         return EXIT_PIPE
+    except OSError as exc:
+        # Writing stdout failed if it still cannot be flushed; ENOSPC and its kin with nothing
+        # left to flush (unbuffered stdout) are the same failure.
+        failed = _stdout_unwritable()
+        if isinstance(failed, OSError) or exc.errno in _DISK_FULL:
+            return _output_failed(failed if isinstance(failed, OSError) else exc)
+        return _internal_error(exc)
     except Exception as exc:  # noqa: BLE001 - the last resort: a bug, said in one line
-        _flush_stdout_quietly()
-        _traceback_if_debugging()
-        message = str(exc).strip().splitlines()[0] if str(exc).strip() else "(no message)"
-        hint = "" if _debug() else f"; {_DEBUG_VARIABLE}=1 shows the traceback"
-        _say(f"mechderive: internal error: {type(exc).__name__}: {message} -- this is a bug in mechderive, "
-             f"please report it to its maintainers with the command line{hint}")
-        return EXIT_INTERNAL
+        return _internal_error(exc)
 
 
 if __name__ == "__main__":  # pragma: no cover

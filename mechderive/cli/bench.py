@@ -44,7 +44,7 @@ def run(args: argparse.Namespace) -> int:
         from ..scenes.output import check_output_path
         from ..scenes.plot import PLOT_SUFFIXES
 
-        check_output_path(args.plot, PLOT_SUFFIXES, what="plot file")  # before minutes of benchmarks
+        check_output_path(args.plot, PLOT_SUFFIXES, what="--plot")  # before minutes of benchmarks
         if importlib.util.find_spec("matplotlib") is None:
             raise InvalidInputError("--plot needs matplotlib: pip install 'mechderive[plot]'")
 
@@ -55,7 +55,7 @@ def run(args: argparse.Namespace) -> int:
     if args.plot:
         from ..scenes.output import atomic_output
 
-        with atomic_output(args.plot, what="plot file") as tmp:  # the figure's format follows tmp's suffix
+        with atomic_output(args.plot, what="--plot") as tmp:  # the figure's format follows tmp's suffix
             plot_work_precision(result, str(tmp))
         result["meta"]["plot"] = args.plot
     if args.json:

@@ -57,13 +57,13 @@ def _check_targets(args: argparse.Namespace) -> None:
     from ..scenes.output import TABLE_SUFFIXES, check_output_path
 
     if args.output:
-        check_output_path(args.output, TABLE_SUFFIXES)
+        check_output_path(args.output, TABLE_SUFFIXES, what="-o")
     if args.plot:
         import importlib.util
 
         from ..scenes.plot import PLOT_SUFFIXES
 
-        check_output_path(args.plot, PLOT_SUFFIXES, what="plot file")
+        check_output_path(args.plot, PLOT_SUFFIXES, what="--plot")
         if importlib.util.find_spec("matplotlib") is None:
             raise InvalidInputError("--plot needs matplotlib: pip install 'mechderive[plot]'")
 
@@ -92,14 +92,14 @@ def run(args: argparse.Namespace) -> int:
         if args.output:
             from ..scenes.output import write_table
 
-            write_table(args.output, result.t, columns)
+            write_table(args.output, result.t, columns, what="-o")
         if args.plot:
             from ..scenes.plot import plot_scene
 
             extra = {"title": f"{scene.name or scene.system}"}
             if scene.system == "free_top":
                 extra["moments"] = (scene.parameters["I1"], scene.parameters["I2"], scene.parameters["I3"])
-            plot_scene(scene.system, {"t": result.t, **result.columns}, args.plot, extra=extra)
+            plot_scene(scene.system, {"t": result.t, **result.columns}, args.plot, extra=extra, what="--plot")
         bar.update(1)
     report = dict(result.report)
     report["timings"] = {"parse": round(parse_s, 6), **report["timings"],

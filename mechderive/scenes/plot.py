@@ -143,17 +143,18 @@ def _falling_cat(fig: Any, d: dict[str, np.ndarray]) -> None:
 
 
 def plot_scene(system: str, data: Mapping[str, Any], path: str | os.PathLike, *,
-               extra: Mapping[str, Any] | None = None) -> Path:
+               extra: Mapping[str, Any] | None = None, what: str = "plot file") -> Path:
     """Draw the result of a ``system`` scene from ``data`` (name -> samples, with ``"t"``) to ``path``.
 
     ``path`` ends in .png, .pdf or .svg.  ``extra`` may hold ``"title"`` (a string)
-    and, for a free top, must hold ``"moments"`` (I1, I2, I3).  Returns the path.
+    and, for a free top, must hold ``"moments"`` (I1, I2, I3).  ``what`` names the
+    file in error messages (the command line passes ``"--plot"``).  Returns the path.
     Raises :class:`~mechderive.errors.InvalidInputError` if matplotlib is missing.
     """
     Figure, FigureCanvasAgg = _import_matplotlib()
     if system not in REQUIRED_DATA:
         raise InvalidInputError(f"expected a system, one of {', '.join(REQUIRED_DATA)}, got {system!r}")
-    path = check_output_path(path, PLOT_SUFFIXES, what="plot file")
+    path = check_output_path(path, PLOT_SUFFIXES, what=what)
     extra = {} if extra is None else extra
     if not isinstance(extra, Mapping) or any(k not in _EXTRA_KEYS for k in extra):
         raise InvalidInputError(f"expected `extra` to be a mapping with keys among {', '.join(_EXTRA_KEYS)}, "
@@ -171,6 +172,6 @@ def plot_scene(system: str, data: Mapping[str, Any], path: str | os.PathLike, *,
     else:
         _falling_cat(fig, d)
     fig.suptitle(title)
-    with atomic_output(path, what="plot file") as tmp:
+    with atomic_output(path, what=what) as tmp:
         fig.savefig(tmp, dpi=110, format=path.suffix.lower()[1:])
     return path
