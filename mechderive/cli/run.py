@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import os
 import sys
 import time
 from pathlib import Path
@@ -31,21 +32,35 @@ def add_parsers(sub: "argparse._SubParsersAction") -> None:
     s.set_defaults(run=scenes)
 
 
+def _exists(path: Path, shown: str) -> bool:
+    """Whether ``path`` names something; a name the system cannot look up is the user's error, said so."""
+    try:
+        os.stat(path)
+    except (FileNotFoundError, NotADirectoryError, ValueError):  # ValueError: a NUL character
+        return False
+    except OSError as exc:  # too long, no permission to search a directory on the way, a loop of links
+        raise InvalidInputError(f"scene file {shown}: expected a file you can read, got {exc.strerror or exc}") from exc
+    return True
+
+
 def _load(spec: str | None):
     from ..scenes.builtin import list_scenes, load_builtin
+    from ..scenes.output import _shown
     from ..scenes.schema import load_scene
 
     if spec is None:
         return load_builtin("default")
     path = Path(spec)
-    if path.suffix == ".toml" or path.exists():
-        if not path.exists():
-            raise InvalidInputError(f"scene file {spec!r}: expected an existing file, got no such file")
+    shown = _shown(spec)
+    exists = _exists(path, shown)
+    if path.suffix == ".toml" or exists:
+        if not exists:
+            raise InvalidInputError(f"scene file {shown}: expected an existing file, got no such file")
         return load_scene(path)
     names = [n for n, _ in list_scenes()]
     if spec in names:
         return load_builtin(spec)
-    raise InvalidInputError(f"scene {spec!r}: expected a .toml file or a built-in scene ({', '.join(names)})")
+    raise InvalidInputError(f"scene {shown}: expected a .toml file or a built-in scene ({', '.join(names)})")
 
 
 _PLOT_NEEDS = {"heavy_top": ("theta", "apex_x", "apex_y", "apex_z"), "free_top": ("omega1", "omega2", "omega3"),
@@ -78,6 +93,10 @@ def run(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     _check_targets(args)
     scene = _load(args.scene)
+    if args.output:
+        from ..scenes.output import check_free_space
+
+        check_free_space(args.output, scene.samples, 1 + len(scene.quantities), what="-o")
     parse_s = time.perf_counter() - start
     solve_scene = scene
     if args.plot:

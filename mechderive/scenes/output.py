@@ -46,7 +46,8 @@ from typing import Any, Iterator, Mapping, Sequence
 
 from ..errors import InvalidInputError, ShapeError
 
-__all__ = ["TABLE_SUFFIXES", "write_table", "report_json", "check_output_path", "atomic_output", "Terminated"]
+__all__ = ["TABLE_SUFFIXES", "write_table", "report_json", "check_output_path", "check_free_space", "atomic_output",
+           "Terminated"]
 
 TABLE_SUFFIXES = (".csv", ".npz")
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
@@ -90,10 +91,17 @@ def _shown(path: str | os.PathLike) -> str:
 def _as_path(path: Any, what: str) -> Path:
     if not isinstance(path, (str, os.PathLike)):
         raise InvalidInputError(f"{what}: expected a path (a string), got {type(path).__name__}")
-    path = Path(path)
+    given = os.fspath(path)
+    if isinstance(given, bytes):
+        given = os.fsdecode(given)
+    path = Path(given)
     text = os.fspath(path)
     if not text or text == ".":
         raise InvalidInputError(f"{what}: expected a file name, got an empty one")
+    if given.endswith(tuple(sep for sep in (os.sep, os.altsep) if sep)):
+        # Path() drops the separator: "out.csv/" would silently become a file "out.csv".
+        raise InvalidInputError(f"{what} {_shown(given)}: expected a file name, got a directory name "
+                                f"(ending in {given[-1]!r})")
     if "\0" in text:
         raise InvalidInputError(f"{what} {_shown(text)}: expected a file name without NUL characters, "
                                 f"got one at position {text.index(chr(0))}")
@@ -217,16 +225,59 @@ def check_output_path(path: str | os.PathLike, suffixes: Sequence[str], *, what:
     Checked before any work is done, so that a long run does not end in a refusal: the
     suffix (case-insensitive); the file the name leads to, symbolic links followed (see
     :func:`atomic_output`), which must be new or a regular file you may write to; its
-    directory, which must exist and be writable; names of at most 255 bytes.  ``what``
-    names the file in the message (the command line passes its option, e.g. ``"-o"``).
-    Raises :class:`~mechderive.errors.InvalidInputError` otherwise.
+    directory, which must exist and be writable; names of at most 255 bytes.  Last, the
+    temporary file the write will use is created and removed at once: only the file system
+    knows whether it accepts the name (``/proc``, ``/sys``, a FAT stick, a quota, root on a
+    read-only mount).  ``what`` names the file in the message (the command line passes its
+    option, e.g. ``"-o"``).  Raises :class:`~mechderive.errors.InvalidInputError` otherwise.
     """
     path = _as_path(path, what)
     if path.suffix.lower() not in suffixes:
         allowed = " or ".join(suffixes) if len(suffixes) == 2 else ", ".join(suffixes)
         raise InvalidInputError(f"{what} {_shown(path)}: expected a suffix {allowed}, got {path.suffix or 'none'!r}")
-    _writable_target(path, what)
+    target, _ = _writable_target(path, what)
+    with _signals_deferred():  # SIGTERM waits the few microseconds the probe lives
+        try:
+            fd, probe = _create_beside(target, path.suffix, None)
+        except OSError as exc:
+            raise InvalidInputError(f"{what} {_shown(path)}: expected a place where a file can be created, "
+                                    f"got {exc.strerror or exc}") from exc
+        os.close(fd)
+        with contextlib.suppress(OSError):
+            os.unlink(probe)
     return path
+
+
+def _table_bytes_at_least(rows: int, columns: int, suffix: str) -> int:
+    """A size no table of ``rows`` × ``columns`` numbers in this format can be smaller than.
+
+    ``.npz``: 8 bytes a number (the arrays alone, headers not counted); ``.csv``: 4 (``0.0``
+    and a separator, the shortest a float's ``repr`` can be).
+    """
+    return rows * columns * (8 if suffix.lower() == ".npz" else 4)
+
+
+def check_free_space(path: str | os.PathLike, rows: int, columns: int, *, what: str = "output file") -> None:
+    """Refuse, before the work, a table of ``rows`` × ``columns`` that cannot fit where ``path`` leads.
+
+    Compared with the space free to you on its file system is a size the table cannot be
+    smaller than (:func:`_table_bytes_at_least`), so that a run which could fit is never
+    refused; a disk filled while the run works is still reported when the write fails.
+    Does nothing where the system does not tell the free space.
+    """
+    if not hasattr(os, "statvfs"):
+        return  # pragma: no cover - Windows
+    path = _as_path(path, what)
+    target, _ = _writable_target(path, what)
+    try:
+        fs = os.statvfs(target.parent)
+    except OSError:
+        return
+    free = fs.f_bavail * fs.f_frsize
+    need = _table_bytes_at_least(rows, columns, path.suffix)
+    if need > free:  # an old file replaced frees its space only after the rename: not counted
+        raise InvalidInputError(f"{what} {_shown(path)}: expected at least {need:,} bytes free for {rows:,} samples "
+                                f"of {columns} columns, got {free:,} free on its file system")
 
 
 def _temporary_name(target: Path, suffix: str) -> Path:

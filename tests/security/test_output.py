@@ -127,6 +127,7 @@ REFUSED = [
     ("-o", "a" * 300 + ".csv", r"expected names of at most 255 bytes, got one of 304"),  # ENAMETOOLONG
     ("-o", "d/" * 2100 + "x.csv", r"expected a path the system can look up, got one of \d+ bytes"),  # > PATH_MAX
     ("-o", "nul\0.csv", r"expected a file name without NUL characters, got one at position 3"),
+    ("-o", "out.csv/", r"expected a file name, got a directory name \(ending in '/'\)"),  # not a file out.csv
     ("-o", "loop.csv", r"expected a symbolic link that leads to a file, got a loop"),
     ("-o", "dangling.csv", r"expected an existing directory, got '.*nowhere' \(where the symbolic link leads"),
     ("-o", "null.csv", r"expected a regular file or a new name, got a character device \(where the symbolic"),
@@ -169,6 +170,35 @@ def test_unwritable_directory_and_read_only_file_refused_before_solving(monkeypa
     assert main(["run", scene, "-o", str(read_only)]) == EXIT_INPUT
     assert "expected a file you may write to, got a read-only one" in _one_error_line(capsys, "-o ")
     assert solved == [] and list(locked.iterdir()) == [] and read_only.read_text() == "old"
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc/self"), reason="Linux's /proc")
+def test_a_file_system_that_creates_no_files_is_found_before_solving(capsys, solved, scene):
+    # os.access says yes to root everywhere; only creating a file tells (here ENOENT in /proc).
+    assert main(["run", scene, "-o", "/proc/mechderive-probe.csv"]) == EXIT_INPUT
+    assert "expected a place where a file can be created, got " in _one_error_line(capsys, "-o ")
+    assert solved == []
+
+
+def test_a_table_that_cannot_fit_is_refused_before_solving(monkeypatch, capsys, solved, scene, tmp_path, out_dir):
+    big = tmp_path / "big.toml"
+    big.write_text(SCENE.format(samples=1_000_000))
+    real_statvfs = os.statvfs
+
+    def almost_full(path):
+        fs = real_statvfs(path)
+        # 100 blocks free: less than 1e6 samples x 2 columns x 8 bytes (npz), and x 4 (csv, "0.0,")
+        return os.statvfs_result((fs.f_bsize, 4096, fs.f_blocks, 100, 100, *tuple(fs)[5:]))
+
+    monkeypatch.setattr(os, "statvfs", almost_full)
+    for suffix, need in ((".npz", 16_000_000), (".csv", 8_000_000)):
+        assert main(["run", str(big), "-o", str(out_dir / f"out{suffix}")]) == EXIT_INPUT
+        err = _one_error_line(capsys, "-o ")
+        assert f"expected at least {need:,} bytes free for 1,000,000 samples of 2 columns, got 409,600 free" in err
+    assert solved == [] and _tree(out_dir) == {}
+    assert main(["run", scene, "-o", str(out_dir / "small.csv")]) == 0  # 11 samples: at least 88 bytes, they fit
+    assert len(solved) == 1 and (out_dir / "small.csv").stat().st_size > 88
+    capsys.readouterr()
 
 
 @pytest.mark.skipif(not IS_ROOT, reason="planting a link owned by another user needs root")
@@ -524,6 +554,34 @@ def test_run_options_anywhere(solved, scene, tmp_path, capsys, argv):
 def test_derive_and_scenes_options_anywhere(argv, expected):
     args = parse_args(build_parser(), argv)
     assert {k: getattr(args, k) for k in expected} == expected
+
+
+# --- the scene argument (finding 5, its command-line part) ---------------------------------------------
+
+@pytest.mark.parametrize("spec, message", [
+    ("a" * 300 + ".toml", "expected a file you can read, got File name too long"),
+    ("a" * 300, "expected a file you can read, got File name too long"),  # not even a built-in name
+    ("d/" * 2100 + "x.toml", "expected a file you can read, got File name too long"),
+    ("loop.toml", "expected a file you can read, got Too many levels of symbolic links"),
+    ("unreadable/s.toml", "expected a file you can read, got Permission denied"),
+], ids=["long name .toml", "long name", "long path", "link loop", "unreadable directory"])
+def test_scene_argument_the_system_cannot_look_up(monkeypatch, capsys, solved, tmp_path, spec, message):
+    # Path.exists() used to raise these (ENAMETOOLONG, ELOOP, EACCES): status 70, "a bug".
+    monkeypatch.chdir(tmp_path)
+    os.symlink("loop.toml", "loop.toml")
+    (tmp_path / "unreadable").mkdir(mode=0o000)
+    real_stat = os.stat
+
+    def stat_(path, *args, **kwargs):  # root searches any directory: show it what a user would get
+        if os.fspath(path).startswith("unreadable/"):
+            raise PermissionError(errno.EACCES, os.strerror(errno.EACCES), os.fspath(path))
+        return real_stat(path, *args, **kwargs)
+
+    monkeypatch.setattr(os, "stat", stat_)
+    assert main(["run", spec]) == EXIT_INPUT
+    err = _one_error_line(capsys, "scene file '")
+    assert message in err and len(err) < 300, err
+    assert solved == []
 
 
 # --- the library function, directly ------------------------------------------------------------------
