@@ -426,7 +426,7 @@ def test_mechanics_export_agrees_with_the_heavy_top():
     (["derive", "heavy_top", "--shape", "disc", "--pivot", "dt(h)"], "--pivot: expected a point on axis 3"),
     (["derive", "heavy_top", "--shape", "disc", "--pivot=-e"], "--pivot: expected a symbol, got 'e'"),
     (["derive", "heavy_top", "--shape", "disc", "--pivot", "(a+b+c+d+f)**2"],
-     "--pivot: expected a pivot like -h/2 or h/4 - d, with at most 6 symbols and 10 terms"),
+     "--pivot: expected a pivot like -h/2 or h/4 - d, with at most 6 symbols, degree 4 and 10 terms"),
 ])
 def test_bad_input_lists_what_is_allowed(argv, message, capsys):
     assert main(argv) == 2

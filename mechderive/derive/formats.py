@@ -71,13 +71,21 @@ def argument_order(exprs: Any) -> list[sp.Symbol]:
     items = exprs.values() if isinstance(exprs, Mapping) else (exprs if isinstance(exprs, (list, tuple)) else [exprs])
     free: set[sp.Symbol] = set()
     for e in items:
-        free |= set(e.free_symbols if isinstance(e, sp.MatrixBase) else as_expression(e, "each expression").free_symbols)
+        free |= set(_checked(e, "each expression").free_symbols)
     rank = {n: i for i, n in enumerate(ARGUMENTS)}
     return sorted(free, key=lambda s: (rank.get(s.name, len(rank)), s.name))
 
 
 # ------------------------------------------------------------------------------ text and LaTeX
+def _checked(value: Any, what: str) -> Any:
+    """A matrix as it is, anything else through :func:`as_expression` (text is never evaluated)."""
+    return value if isinstance(value, sp.MatrixBase) else as_expression(value, what)
+
+
 def _equation(expr: Any, lhs: Any) -> Any:
+    expr = _checked(expr, "the expression")
+    if lhs is not None and not isinstance(lhs, str):
+        lhs = _checked(lhs, "the left-hand side")
     if lhs is None:
         return display_symbols(expr)
     if isinstance(lhs, str):  # "= 0"
@@ -162,8 +170,7 @@ def to_sympy_source(exprs: Mapping[str, Any], *, comments: Mapping[str, str] | N
     for name in exprs:
         if not isinstance(name, str) or not name.isidentifier() or keyword.iskeyword(name):
             raise InvalidInputError(f"expected each name to be a Python identifier, got {name!r}")
-    exprs = {name: e if isinstance(e, sp.MatrixBase) else as_expression(e, f"the value of {name}")
-             for name, e in exprs.items()}
+    exprs = {name: _checked(e, f"the value of {name}") for name, e in exprs.items()}
     symbols = set()
     for e in exprs.values():
         symbols |= set(e.free_symbols)

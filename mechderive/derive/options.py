@@ -15,11 +15,13 @@ Text is never evaluated: a number given as text (``"9.81"``, ``"1/3"``) is read 
 :func:`mechderive.formulas.parse.parse_number` — 0 or of magnitude 1e-300 to 1e300, the same
 range for numbers given as such; a pivot given as text is an expression in the body's dimension
 symbols (``-h/2``) read by the whitelist parser :func:`mechderive.formulas.parse.parse_expression`,
-where other names become new positive symbols (``-d``).  A pivot must stay small: over a common
-denominator and expanded, numerator terms × denominator terms at most :data:`MAX_PIVOT_TERMS`, and
-at most :data:`MAX_PIVOT_SYMBOLS` symbols.  The parallel-axis theorem squares it and the results
-are factored, whose cost grows quickly with both (measured: ~1 s at the limits, where
-(a+b+c+d+f+g+k+m+n+p)**2/(q+r)**2 took 30 s).
+where other names become new positive symbols (``-d``).  A pivot is an algebraic expression
+(arithmetic and ``sqrt``, no other function) that stays small: at most :data:`MAX_PIVOT_SYMBOLS`
+symbols, total degree :data:`MAX_PIVOT_DEGREE`, and over a common denominator and expanded,
+numerator terms × denominator terms at most :data:`MAX_PIVOT_TERMS`.  The parallel-axis theorem
+squares it and the results are factored, whose cost grows quickly with each of these (measured on
+2 shared cores: ≤ ~1.5 s at the limits, where (a+b+c+d+f+g+k+m+n+p)**2/(q+r)**2 took 30 s and
+(a*b*c*d*f*g)**100 did not finish).
 
 Errors name the option they are about (``pivot: expected …``); the command line passes
 :data:`CLI_LABELS` so that they name its arguments (``--pivot: expected …``, ``--set g: …``).
@@ -39,7 +41,7 @@ from ..errors import InvalidInputError, MechDeriveError
 from ..formulas.parse import MAX_MAGNITUDE, dt, parse_expression, parse_number
 
 __all__ = ["Options", "as_number", "parse_assignment", "body_parameters", "API_LABELS", "CLI_LABELS",
-           "MAX_PIVOT_TERMS", "MAX_PIVOT_SYMBOLS"]
+           "MAX_PIVOT_TERMS", "MAX_PIVOT_SYMBOLS", "MAX_PIVOT_DEGREE"]
 
 #: How errors name each option in the Python API ...
 API_LABELS: Mapping[str, str] = {"pivot": "pivot", "moments": "moments", "shape": "shape",
@@ -52,6 +54,8 @@ CLI_LABELS: Mapping[str, str] = {"pivot": "--pivot", "moments": "--moments", "sh
 MAX_PIVOT_TERMS = 10
 #: Most symbols in a pivot.
 MAX_PIVOT_SYMBOLS = 6
+#: Highest total degree of a pivot (a Mul adds its factors' degrees, x**(p/q) counts |p| times).
+MAX_PIVOT_DEGREE = 4
 _MAX_NAME = 64
 
 
@@ -149,6 +153,21 @@ def _expanded_terms(expr: sp.Expr, limit: int) -> tuple[int, int]:
     return 1, 1
 
 
+def _degree(expr: sp.Expr) -> float:
+    """The total degree of an algebraic ``expr`` in its symbols and radicals (inf if not algebraic)."""
+    if expr.is_Symbol:
+        return 1
+    if expr.is_number:
+        return 0
+    if isinstance(expr, sp.Add):
+        return max(_degree(a) for a in expr.args)
+    if isinstance(expr, sp.Mul):
+        return sum(_degree(a) for a in expr.args)
+    if isinstance(expr, sp.Pow) and expr.exp.is_Rational:
+        return abs(int(expr.exp.p)) * _degree(expr.base)
+    return math.inf
+
+
 def _parse_pivot(value: Any, dimensions: Mapping[str, sp.Symbol], label: str) -> sp.Expr | None:
     if value is None:
         return None
@@ -174,11 +193,18 @@ def _parse_pivot(value: Any, dimensions: Mapping[str, sp.Symbol], label: str) ->
         raise InvalidInputError(f"{label}: expected a real expression, got {_short(str(expr))}")
     if expr.is_number:
         return _in_range(expr, label, value)
+    functions = sorted({type(f).__name__ for f in expr.atoms(sp.Function)})
+    if functions:
+        raise InvalidInputError(f"{label}: expected an algebraic pivot (arithmetic and sqrt) like -h/2 or h/4 - d, "
+                                f"got {functions[0]} in {_short(str(expr))}")
+    for number in expr.atoms(sp.Rational):
+        _in_range(number, f"{label}: each number", number)
     num, den = _expanded_terms(expr, MAX_PIVOT_TERMS)
-    if num * den > MAX_PIVOT_TERMS or len(expr.free_symbols) > MAX_PIVOT_SYMBOLS:
+    if (num * den > MAX_PIVOT_TERMS or len(expr.free_symbols) > MAX_PIVOT_SYMBOLS
+            or _degree(expr) > MAX_PIVOT_DEGREE):
         raise InvalidInputError(f"{label}: expected a pivot like -h/2 or h/4 - d, with at most {MAX_PIVOT_SYMBOLS} "
-                                f"symbols and {MAX_PIVOT_TERMS} terms (numerator × denominator) when expanded, "
-                                f"got {_short(str(expr))}")
+                                f"symbols, degree {MAX_PIVOT_DEGREE} and {MAX_PIVOT_TERMS} terms (numerator × "
+                                f"denominator) when expanded, got {_short(str(expr))}")
     return expr
 
 
