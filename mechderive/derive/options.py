@@ -15,7 +15,7 @@ Text is never evaluated: a number given as text (``"9.81"``, ``"1/3"``) is read 
 :func:`mechderive.formulas.parse.parse_number` — 0 or of magnitude 1e-300 to 1e300, the same
 range for numbers given as such; a pivot given as text is an expression in the body's dimension
 symbols (``-h/2``) read by the whitelist parser :func:`mechderive.formulas.parse.parse_expression`,
-where other names become new positive symbols (``-d``).  A pivot is an algebraic expression
+where other names become new positive symbols (``-d``).  A pivot typed as text is an algebraic expression
 (arithmetic and ``sqrt``, no other function) that stays small: at most :data:`MAX_PIVOT_SYMBOLS`
 symbols, total degree :data:`MAX_PIVOT_DEGREE`, and over a common denominator and expanded,
 numerator terms × denominator terms at most :data:`MAX_PIVOT_TERMS`.  The parallel-axis theorem
@@ -168,7 +168,25 @@ def _degree(expr: sp.Expr) -> float:
     return math.inf
 
 
+def _check_pivot_text(expr: sp.Expr, label: str) -> None:
+    """Refuse a pivot typed as text beyond the limits of the module docstring (its cost grows with them)."""
+    functions = sorted({type(f).__name__ for f in expr.atoms(sp.Function)})
+    if functions:
+        raise InvalidInputError(f"{label}: expected an algebraic pivot (arithmetic and sqrt) like -h/2 or h/4 - d, "
+                                f"got {functions[0]} in {_short(str(expr))}")
+    for number in expr.atoms(sp.Rational):
+        _in_range(number, f"{label}: each number", number)
+    num, den = _expanded_terms(expr, MAX_PIVOT_TERMS)
+    if (num * den > MAX_PIVOT_TERMS or len(expr.free_symbols) > MAX_PIVOT_SYMBOLS
+            or _degree(expr) > MAX_PIVOT_DEGREE):
+        raise InvalidInputError(f"{label}: expected a pivot like -h/2 or h/4 - d, with at most {MAX_PIVOT_SYMBOLS} "
+                                f"symbols, degree {MAX_PIVOT_DEGREE} and {MAX_PIVOT_TERMS} terms (numerator × "
+                                f"denominator) when expanded, got {_short(str(expr))}")
+
+
 def _parse_pivot(value: Any, dimensions: Mapping[str, sp.Symbol], label: str) -> sp.Expr | None:
+    """The pivot's z: text is parsed and held to the limits; a SymPy expression (from a program) is taken
+    as it is; either must be real and free of dt."""
     if value is None:
         return None
     if isinstance(value, str):
@@ -193,18 +211,8 @@ def _parse_pivot(value: Any, dimensions: Mapping[str, sp.Symbol], label: str) ->
         raise InvalidInputError(f"{label}: expected a real expression, got {_short(str(expr))}")
     if expr.is_number:
         return _in_range(expr, label, value)
-    functions = sorted({type(f).__name__ for f in expr.atoms(sp.Function)})
-    if functions:
-        raise InvalidInputError(f"{label}: expected an algebraic pivot (arithmetic and sqrt) like -h/2 or h/4 - d, "
-                                f"got {functions[0]} in {_short(str(expr))}")
-    for number in expr.atoms(sp.Rational):
-        _in_range(number, f"{label}: each number", number)
-    num, den = _expanded_terms(expr, MAX_PIVOT_TERMS)
-    if (num * den > MAX_PIVOT_TERMS or len(expr.free_symbols) > MAX_PIVOT_SYMBOLS
-            or _degree(expr) > MAX_PIVOT_DEGREE):
-        raise InvalidInputError(f"{label}: expected a pivot like -h/2 or h/4 - d, with at most {MAX_PIVOT_SYMBOLS} "
-                                f"symbols, degree {MAX_PIVOT_DEGREE} and {MAX_PIVOT_TERMS} terms (numerator × "
-                                f"denominator) when expanded, got {_short(str(expr))}")
+    if isinstance(value, str):
+        _check_pivot_text(expr, label)
     return expr
 
 
