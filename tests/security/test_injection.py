@@ -54,6 +54,7 @@ def _payloads(canary: Path) -> dict[str, str]:
     return {
         "issue": f"M.subs(M, '{opener}')",                                   # finding 1, verbatim
         "exec chr": "exec(" + "+".join(f"chr({ord(c)})" for c in opener) + ")",
+        "issue exec": "M.subs(M, 'exec(" + "+".join(f"chr({ord(c)})" for c in opener) + ")')",  # any command
         "import": f"__import__('os').system('touch {p}')",
         "builtins": f"__builtins__.open('{p}','w')",
         "attribute": "().__class__.__base__.__subclasses__()",
@@ -109,7 +110,7 @@ def test_no_python_api_text_runs_code(tmp_path):
 
 def test_symbolic_apis_refuse_text(tmp_path):
     """Every public symbolic API of inertia/, kinematics.euler, derive.formats and catalog refuses text
-    (SymPy's sympify, Matrix and subs would have evaluated it: 32 of these 35 ran the canary before)."""
+    (SymPy's sympify, Matrix and subs would have evaluated it: 30 of the first 33 ran the canary before)."""
     from mechderive.catalog import checks, registry
     from mechderive.derive import formats
     from mechderive.formulas.parse import as_expression
@@ -162,6 +163,16 @@ def test_symbolic_apis_refuse_text(tmp_path):
         with pytest.raises(InvalidInputError):
             call()
         assert not canary.exists(), f"{name}: the injected code ran"
+
+
+@pytest.mark.slow  # sympy.physics.mechanics takes ~5 s to build the model
+def test_mechanics_interop_refuses_text(tmp_path):
+    from mechderive.interop.mechanics import to_mechanics
+
+    canary = tmp_path / "pwned"
+    with pytest.raises(InvalidInputError, match="expected `expr` to be a SymPy expression or a number, got the text"):
+        to_mechanics("free_top").to_state(f"open({str(canary)!r}, 'w')")
+    assert not canary.exists()
 
 
 def test_to_sympy_source_names_are_identifiers():
