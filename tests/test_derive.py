@@ -448,7 +448,7 @@ def test_bad_input_from_python():
         derive("free_top", shape="disc", moments=[1, 1, 2])
     with pytest.raises(InvalidInputError, match="expected a shape for inertia, one of rod, .* got none"):
         derive("inertia")
-    with pytest.raises(InvalidInputError, match="pivot: expected a symbol name starting with a letter, got '__import__'"):
+    with pytest.raises(InvalidInputError, match="pivot: expected a symbol name starting with a letter, got '__impor"):
         derive("inertia", ["inertia_pivot"], shape="disc", pivot="__import__")
     with pytest.raises(InvalidInputError, match=r"values\['g'\]: expected a number 0 or of magnitude"):
         derive("heavy_top", ["energy"], values={"g": 1e-310})

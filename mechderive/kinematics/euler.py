@@ -195,8 +195,8 @@ def euler_rotation(phi: Any, theta: Any, psi: Any) -> sp.Matrix:
 
     m = model()
     names = ("phi", "theta", "psi")
-    return m.state_rotation.subs({state_symbol(n): as_expression(v, f"`{n}`") for n, v in zip(names, (phi, theta, psi))},
-                                 simultaneous=True)
+    angles = {state_symbol(n): as_expression(v, f"`{n}`") for n, v in zip(names, (phi, theta, psi))}
+    return m.state_rotation.subs(angles, simultaneous=True)
 
 
 # The numeric functions live in rotations.py (no SymPy needed there); re-exported here.
