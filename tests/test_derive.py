@@ -404,15 +404,29 @@ def test_mechanics_export_agrees_with_the_heavy_top():
     (["derive", "heavy_top", "--sequence", "XYZ"], "expected the chapter's ZXZ body-fixed angles for heavy_top"),
     (["derive", "inertia"], "expected a shape after inertia, one of rod, disc, .*got 'none'"),
     (["derive", "inertia", "pyramid"], "expected a shape after inertia, .*got 'pyramid'"),
-    (["derive", "heavy_top", "--shape", "pyramid"], "expected a shape among rod, disc, .*got 'pyramid'"),
-    (["derive", "heavy_top", "--shape", "cuboid"], r"expected a body symmetric about axis 3 \(I1 = I2\)"),
-    (["derive", "heavy_top", "--moments", "1", "2", "2"], "expected I1 = I2 for the symmetric heavy top, got 1 and 2"),
-    (["derive", "free_top", "--moments", "1", "1", "3"], "triangle"),
-    (["derive", "rotation", "--shape", "disc"], "expected no shape for rotation"),
-    (["derive", "heavy_top", "--set", "q=1"], "expected values for symbols among .*got 'q'"),
-    (["derive", "heavy_top", "--set", "g"], "expected NAME=NUMBER, got 'g'"),
-    (["derive", "heavy_top", "--set", "g=fast"], "expected the value of g to be a real number, got 'fast'"),
-    (["derive", "heavy_top", "--pivot", "1"], "expected a shape with the pivot"),
+    (["derive", "heavy_top", "--shape", "pyramid"], "--shape: expected a shape among rod, disc, .*got 'pyramid'"),
+    (["derive", "heavy_top", "--shape", "cuboid"], r"--shape: expected a body symmetric about axis 3 \(I1 = I2\)"),
+    (["derive", "heavy_top", "--moments", "1", "2", "2"],
+     "--moments: expected I1 = I2 for the symmetric heavy top, got 1 and 2"),
+    (["derive", "free_top", "--moments", "1", "1", "3"], "--moments: expected I1 \\+ I2 >= I3 \\(triangle"),
+    (["derive", "free_top", "--moments", "1", "-1", "1"], "--moments: expected .*> 0"),
+    (["derive", "free_top", "--moments", "1", "x", "1"], "--moments I2: expected a number like 9.81"),
+    (["derive", "rotation", "--shape", "disc"], "--shape: expected no shape for rotation"),
+    (["derive", "heavy_top", "--set", "q=1"], "--set q: expected values for symbols among .*got 'q'"),
+    (["derive", "heavy_top", "--set", "g"], "--set: expected NAME=NUMBER with NAME a symbol's name, got 'g'"),
+    (["derive", "heavy_top", "--set", "g=fast"],
+     "--set g: expected a number like 9.81, -1.5e-3 or 1/3, got 'fast': .*unknown symbol 'fast'"),
+    (["derive", "heavy_top", "--set", "g=1/0"], "--set g: .*division by zero"),
+    (["derive", "heavy_top", "--set", "g=1e400"], "--set g: expected a number 0 or of magnitude 1e-300 to 1e300"),
+    (["derive", "heavy_top", "--set", "g=pi"], "--set g: expected a rational number"),
+    (["derive", "heavy_top", "--pivot", "1"], "--pivot: expected a shape with the pivot"),
+    (["derive", "heavy_top", "--shape", "disc", "--pivot", "h"],
+     r"--pivot: expected the pivot below the centre of mass \(l >= 0\), got l = -h"),
+    (["derive", "heavy_top", "--shape", "disc", "--pivot", "sqrt(-h)"], "--pivot: expected a real expression"),
+    (["derive", "heavy_top", "--shape", "disc", "--pivot", "dt(h)"], "--pivot: expected a point on axis 3"),
+    (["derive", "heavy_top", "--shape", "disc", "--pivot=-e"], "--pivot: expected a symbol, got 'e'"),
+    (["derive", "heavy_top", "--shape", "disc", "--pivot", "(a+b+c+d+f)**2"],
+     "--pivot: expected a pivot like -h/2 or h/4 - d, with at most 6 symbols, degree 4 and 10 terms"),
 ])
 def test_bad_input_lists_what_is_allowed(argv, message, capsys):
     assert main(argv) == 2
@@ -430,12 +444,22 @@ def test_bad_input_from_python():
         derive("free_top", ["L"])
     with pytest.raises(InvalidInputError, match="expected a format among text, .* got 'md'"):
         render([], "md")
-    with pytest.raises(InvalidInputError, match="expected a body shape or numeric moments, got both"):
+    with pytest.raises(InvalidInputError, match="shape, moments: expected a body shape or numeric moments, got both"):
         derive("free_top", shape="disc", moments=[1, 1, 2])
     with pytest.raises(InvalidInputError, match="expected a shape for inertia, one of rod, .* got none"):
         derive("inertia")
-    with pytest.raises(InvalidInputError, match="expected the pivot as an arithmetic expression, got '__import__'"):
+    with pytest.raises(InvalidInputError, match="pivot: expected a symbol name starting with a letter, got '__impor"):
         derive("inertia", ["inertia_pivot"], shape="disc", pivot="__import__")
+    with pytest.raises(InvalidInputError, match=r"values\['g'\]: expected a number 0 or of magnitude"):
+        derive("heavy_top", ["energy"], values={"g": 1e-310})
+    with pytest.raises(InvalidInputError, match=r"values\['g'\]: expected a finite real number, got nan"):
+        derive("heavy_top", ["energy"], values={"g": float("nan")})
+    with pytest.raises(InvalidInputError, match="moments I1: expected a real number, got True"):
+        derive("free_top", moments=[True, 1, 1])
+    with pytest.raises(InvalidInputError, match="moments: expected three moments I1 I2 I3, got '1 1 1'"):
+        derive("free_top", moments="1 1 1")
+    with pytest.raises(InvalidInputError, match="pivot: expected the pivot as a number, an expression or its text"):
+        derive("inertia", ["inertia_pivot"], shape="disc", pivot=[0])
 
 
 def test_cli_module_is_light():

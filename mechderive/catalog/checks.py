@@ -24,11 +24,10 @@ __all__ = ["same", "same_numerically", "as_matrix"]
 
 
 def as_matrix(obj: Any) -> sp.Matrix:
-    if isinstance(obj, sp.MatrixBase):
-        return sp.Matrix(obj)
-    if isinstance(obj, (list, tuple)):
-        return sp.Matrix(obj)
-    return sp.Matrix([sp.sympify(obj)])
+    """``obj`` (a matrix, a list or tuple, an expression) as a Matrix; text inside is refused, never evaluated."""
+    from ..formulas.parse import as_matrix as checked_matrix
+
+    return checked_matrix(obj, "the formula")
 
 
 def _is_zero(e: sp.Expr) -> bool:

@@ -298,7 +298,9 @@ def perturb(formula: Any, member: int | None = None, *, entry: int = 0) -> Any:
         raise InvalidInputError(f"expected entry 0 of a formula that is not a matrix, got {entry}")
     if isinstance(formula, sp.Equality):
         return sp.Eq(formula.lhs, perturb(formula.rhs), evaluate=False)
-    expr = sp.sympify(formula)
+    from ..formulas.parse import as_expression
+
+    expr = as_expression(formula, "the formula")  # never text: sympify would evaluate it
     # Scale *and* shift: scaling alone leaves an entry that is identically zero (but not
     # structurally 0, like an unsimplified diagonal of ṘRᵀ) unchanged.
     return expr * sp.Rational(101, 100) + sp.Rational(1, 7)

@@ -45,13 +45,13 @@ def _m() -> ht.HeavyTopModel:
 
 def _spin_derived(expr) -> sp.Expr:
     """``expr`` with the symbol ω3 replaced by the spin ψ̇ + φ̇ cos θ derived from ṘRᵀ (3.58)."""
-    return sp.sympify(expr).subs(omega3, _m().spin)
+    return sp.sympify(expr, strict=True).subs(omega3, _m().spin)
 
 
 def _rate_along_motion(F) -> sp.Expr:
     """dF/dt along the derived equations of motion: Σ ∂F/∂q q̇ + ∂F/∂q̇ q̈(q, q̇)."""
     m = _m()
-    F = sp.sympify(F)
+    F = sp.sympify(F, strict=True)
     return (sum(F.diff(q) * v for q, v in zip(m.positions, m.velocities))
             + sum(F.diff(v) * acc for v, acc in zip(m.velocities, m.accelerations)))
 
@@ -553,7 +553,7 @@ def _check_3_81(f) -> Outcome:
     # (c) hanging top: the printed root is imaginary, and the discriminant is positive for every spin
     k = sp.Symbol("k", positive=True)  # cos θ0 = −k
     hanging = sp.expand(m.precession_discriminant.subs(c(theta0), -k))
-    imaginary = sp.sympify(f).subs(c(theta0), -k).is_real is False
+    imaginary = sp.sympify(f, strict=True).subs(c(theta0), -k).is_real is False
     ok = threshold.passed and agree and bool(hanging.is_positive) and imaginary
     return Outcome(ok, f"for cos θ0 > 0: {threshold.detail}; the condition matches discriminant > 0 at 2000 random "
                        f"points: {agree}; for cos θ0 = −k < 0 the discriminant is {hanging} > 0 for any ω3 and the "
@@ -621,7 +621,7 @@ def _check_sleeping_integration(f) -> Outcome:
     from scipy.integrate import solve_ivp
 
     rhs = _m().ode_rhs(ht.PARAMETERS)
-    crit = float(sp.sqrt(sp.sympify(f).subs(dict(zip(ht.PARAMETERS, _SLEEPING_CASE)))))
+    crit = float(sp.sqrt(sp.sympify(f, strict=True).subs(dict(zip(ht.PARAMETERS, _SLEEPING_CASE)))))
     top = {}
     for k in (0.997, 1.003):
         sol = solve_ivp(rhs, (0.0, 60.0), [0.0, 1e-3, 0.0, 0.0, 0.0, k * crit], args=_SLEEPING_CASE,

@@ -54,9 +54,10 @@ def add_parser(sub: "argparse._SubParsersAction") -> None:
                    help="a standard body (solid_cone, disc, ...) whose derived inertia replaces I1, I2, I3 (and l)")
     p.add_argument("--pivot", default=None, metavar="Z",
                    help="pivot (0, 0, Z) on axis 3 in the shape's coordinates, e.g. -h/2 (with --shape)")
-    p.add_argument("--moments", nargs=3, default=None, metavar=("I1", "I2", "I3"), help="numeric principal moments")
+    p.add_argument("--moments", nargs=3, default=None, metavar=("I1", "I2", "I3"),
+                   help="numeric principal moments (numbers like 1.5, 2e-3 or 1/3; 0 or 1e-300 to 1e300)")
     p.add_argument("--set", action="append", default=[], metavar="NAME=NUMBER", dest="values",
-                   help="substitute a number for a symbol (repeatable), e.g. --set g=9.81")
+                   help="substitute a number for a symbol (repeatable), e.g. --set g=9.81 (0 or 1e-300 to 1e300)")
     p.set_defaults(run=run)
 
 
@@ -93,15 +94,20 @@ def run(args: argparse.Namespace) -> int:
         print("(* printed by default)")
         return 0
     from ..derive.api import derive_entries
-    from ..derive.options import Options
+    from ..derive.options import CLI_LABELS, Options
 
     shape, quantities = _shape_and_quantities(args)
     values = dict(parse_assignment(v) for v in args.values)
-    entries = derive_entries(args.system, quantities or None, sequence=args.sequence, frame=args.frame, shape=shape,
-                             pivot=args.pivot, moments=args.moments, values=values, simplify=args.simplify)
-    opts = Options(sequence=args.sequence, frame=args.frame)
+    # Every text argument is read here, by the whitelist parser, and only what it built goes on:
+    # the headers of the output show the parsed values, never the text typed.
+    opts = Options(sequence=args.sequence, frame=args.frame, shape=shape, pivot=args.pivot, moments=args.moments,
+                   values=values, labels=CLI_LABELS)
+    entries = derive_entries(args.system, quantities or None, sequence=opts.sequence, frame=opts.frame, shape=shape,
+                             pivot=opts.pivot, moments=opts.moments, values=opts.values, simplify=args.simplify,
+                             labels=CLI_LABELS)
     shown = {"sequence": opts.sequence, "frame": opts.frame} if "sequence" in spec.takes else {}
-    shown.update({"shape": shape, "pivot": args.pivot, "moments": " ".join(args.moments) if args.moments else None})
-    shown.update(values)
+    shown.update({"shape": shape, "pivot": opts.pivot,
+                  "moments": " ".join(map(str, opts.moments)) if opts.moments else None})
+    shown.update(opts.values)
     sys.stdout.write(render(entries, args.format, system=args.system, summary=spec.summary, options=shown, cse=args.cse))
     return 0

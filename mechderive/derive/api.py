@@ -18,7 +18,7 @@ import sympy as sp
 
 from ..errors import InvalidInputError
 from .catalog import ZERO, System, system
-from .options import Options
+from .options import API_LABELS, Options
 
 __all__ = ["Derived", "derive", "derive_entries"]
 
@@ -43,9 +43,9 @@ class Derived:
 
 def _check_takes(spec: System, options: Options, given: Mapping[str, Any]) -> None:
     for option, value in given.items():
-        if value and option not in spec.takes:
-            raise InvalidInputError(f"expected no {option} for {spec.name} (it takes "
-                                    f"{', '.join(sorted(spec.takes))}), got {value!r}")
+        if value is not None and option not in spec.takes:
+            raise InvalidInputError(f"{options.label(option)}: expected no {option} for {spec.name} (it takes "
+                                    f"{', '.join(sorted(spec.takes))}), got {_short(repr(value))}")
     if "sequence" not in spec.takes and not options.is_default_sequence:
         raise InvalidInputError(f"expected the chapter's ZXZ body-fixed angles for {spec.name} (its model is "
                                 f"derived in them), got {options.sequence} {options.frame}-fixed")
@@ -55,12 +55,17 @@ def _check_takes(spec: System, options: Options, given: Mapping[str, Any]) -> No
         raise InvalidInputError(f"expected a shape for inertia, one of {', '.join(BODIES)}, got none")
 
 
+def _short(text: str, limit: int = 60) -> str:
+    return text if len(text) <= limit else text[: limit - 1] + "…"
+
+
+# The values below are the catalog's derived SymPy objects (never text): sympify only wraps them.
 def _apply(value: Any, subs: dict) -> Any:
     if not subs:
         return value
     if isinstance(value, sp.MatrixBase):
-        return value.applyfunc(lambda e: sp.sympify(e).subs(subs, simultaneous=True))
-    return sp.sympify(value).subs(subs, simultaneous=True)
+        return value.applyfunc(lambda e: sp.sympify(e, strict=True).subs(subs, simultaneous=True))
+    return sp.sympify(value, strict=True).subs(subs, simultaneous=True)
 
 
 def _simplified(value: Any) -> Any:
@@ -70,7 +75,7 @@ def _simplified(value: Any) -> Any:
 
 
 def _free_symbols(value: Any) -> set[sp.Symbol]:
-    return set(value.free_symbols if isinstance(value, sp.MatrixBase) else sp.sympify(value).free_symbols)
+    return set(value.free_symbols if isinstance(value, sp.MatrixBase) else sp.sympify(value, strict=True).free_symbols)
 
 
 def _free_names(value: Any) -> set[str]:
@@ -80,11 +85,17 @@ def _free_names(value: Any) -> set[str]:
 def derive_entries(system_name: str, quantities: Iterable[str] | None = None, *, sequence: str = "ZXZ",
                    frame: str | None = None, shape: str | None = None, pivot: Any = None,
                    moments: Sequence[Any] | None = None, values: Mapping[Any, Any] | None = None,
-                   simplify: bool = False) -> list[Derived]:
-    """The :class:`Derived` records of :func:`derive` (with description, equation number, left-hand side)."""
+                   simplify: bool = False, labels: Mapping[str, str] | None = None) -> list[Derived]:
+    """The :class:`Derived` records of :func:`derive` (with description, equation number, left-hand side).
+
+    ``labels``: how errors name the options (:data:`.options.API_LABELS` by default; the command
+    line passes :data:`.options.CLI_LABELS`).
+    """
     spec = system(system_name)
+    if values is not None and not isinstance(values, Mapping):
+        raise InvalidInputError(f"values: expected a mapping name -> number, got {type(values).__name__}")
     options = Options(sequence=sequence, frame=frame, shape=shape, pivot=pivot, moments=moments,
-                      values=dict(values or {}), simplify=simplify)
+                      values=dict(values or {}), simplify=simplify, labels=labels or API_LABELS)
     _check_takes(spec, options, {"shape": shape if system_name != "inertia" else None, "moments": moments,
                                  "pivot": pivot if system_name not in ("inertia", "heavy_top", "free_top") else None})
     names = list(spec.defaults) if quantities is None else list(quantities)
@@ -109,8 +120,8 @@ def derive_entries(system_name: str, quantities: Iterable[str] | None = None, *,
         present = set().union(*(_free_names(d.value) for d in out))
         missing = sorted(set(options.values) - present)
         if missing:
-            raise InvalidInputError(f"expected values for symbols among {', '.join(sorted(present)) or 'none'}, "
-                                    f"got {missing[0]!r}")
+            raise InvalidInputError(f"{options.label('values', missing[0])}: expected values for symbols among "
+                                    f"{', '.join(sorted(present)) or 'none'}, got {missing[0]!r}")
         out = [replace(d, value=_apply(d.value, {s: options.values[s.name] for s in _free_symbols(d.value)
                                                  if s.name in options.values}))
                for d in out]

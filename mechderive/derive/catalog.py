@@ -144,14 +144,16 @@ def _heavy_parameters(o: Options) -> dict:
     if o.shape:
         p = body_parameters(o, default_pivot="origin")
         if sp.simplify(p["I1"] - p["I2"]) != 0:
-            raise InvalidInputError(f"expected a body symmetric about axis 3 (I1 = I2), got I1 = {p['I1']}, "
-                                    f"I2 = {p['I2']} for {o.shape!r}")
+            raise InvalidInputError(f"{o.label('shape')}: expected a body symmetric about axis 3 (I1 = I2), got "
+                                    f"I1 = {p['I1']}, I2 = {p['I2']} for {o.shape!r}")
         if p["l"].is_negative:
-            raise InvalidInputError(f"expected the pivot below the centre of mass (l >= 0), got l = {p['l']}")
+            raise InvalidInputError(f"{o.label('pivot' if o.pivot is not None else 'shape')}: expected the pivot "
+                                    f"below the centre of mass (l >= 0), got l = {p['l']}")
         return {I1: p["I1"], I3: p["I3"], l: p["l"]}
     if o.moments:
         if o.moments[0] != o.moments[1]:
-            raise InvalidInputError(f"expected I1 = I2 for the symmetric heavy top, got {o.moments[0]} and {o.moments[1]}")
+            raise InvalidInputError(f"{o.label('moments')}: expected I1 = I2 for the symmetric heavy top, got "
+                                    f"{o.moments[0]} and {o.moments[1]}")
         return {I1: o.moments[0], I3: o.moments[2]}
     return {}
 

@@ -26,6 +26,16 @@ than :data:`MAX_LENGTH` characters and nesting deeper than :data:`MAX_DEPTH`.  T
 checked before or while walking, so hostile input is refused in well under a millisecond per
 character.  LaTeX is refused too (see :func:`parse_expression`).
 
+The same walk serves every other piece of text a user gives, so that nothing typed ever reaches
+``eval``, ``sympify`` or ``parse_expr``:
+
+- :func:`parse_expression` with ``new_symbol``: unknown names become new symbols (``derive``'s
+  pivot ``-h/2 - d``);
+- :func:`parse_number`: one exact number (``9.81``, ``-1.5e-3``, ``1/3``), 0 or of magnitude
+  10^-:data:`MAX_MAGNITUDE` to 10^:data:`MAX_MAGNITUDE` (``derive --set``, ``--moments``);
+- :func:`as_expression`, :func:`as_matrix`: for values a *program* passes to a symbolic API
+  (SymPy objects, numbers): text is refused there, since SymPy would evaluate it.
+
 >>> import sympy as sp
 >>> x = sp.Symbol("x", real=True)
 >>> parse_expression("sin(x)^2 + 0.5*x", {"x": x})
@@ -41,15 +51,17 @@ mechderive.errors.InvalidInputError: expected a maths expression, got an attribu
 from __future__ import annotations
 
 import ast
+import numbers
 import re
 from fractions import Fraction
-from typing import Mapping
+from typing import Any, Callable, Mapping
 
 import sympy as sp
 
 from ..errors import InvalidInputError
 
-__all__ = ["parse_expression", "parse_claim", "dt", "FUNCTIONS", "MAX_LENGTH", "MAX_DEPTH", "MAX_EXPONENT"]
+__all__ = ["parse_expression", "parse_claim", "parse_number", "as_expression", "as_matrix", "dt", "FUNCTIONS",
+           "MAX_LENGTH", "MAX_DEPTH", "MAX_EXPONENT", "MAX_MAGNITUDE"]
 
 #: Longest accepted text, in characters.
 MAX_LENGTH = 2000
@@ -59,6 +71,15 @@ MAX_DEPTH = 40
 MAX_EXPONENT = 100
 #: Largest accepted size of a number, in bits (about 10^1000).
 _MAX_BITS = 3400
+#: A number given alone (:func:`parse_number`) is 0 or of magnitude 10^-300 … 10^300: within a
+#: double's normal range, so that it survives the generated NumPy and C code.
+MAX_MAGNITUDE = 300
+#: Longest name accepted as a new symbol (``new_symbol`` of :func:`parse_expression`).
+_MAX_NAME = 64
+#: Names never made new symbols: they look like constants the parser does not offer.
+_NOT_SYMBOLS = {"e": "Euler's number is exp(1)", "I": "complex numbers are not supported",
+                "j": "complex numbers are not supported", "oo": "infinity is not a value",
+                "nan": "not a number is not a value", "zoo": "infinity is not a value"}
 
 
 class dt(sp.Function):  # noqa: N801 - printed as the user writes it
@@ -145,8 +166,9 @@ def _bits(r: sp.Rational) -> int:
 class _Builder:
     """Walks a Python syntax tree, building a SymPy expression from whitelisted pieces only."""
 
-    def __init__(self, text: str, names: Mapping[str, sp.Expr], hints: Mapping[str, str]) -> None:
-        self.text, self.names, self.hints = text, names, hints
+    def __init__(self, text: str, names: Mapping[str, sp.Expr], hints: Mapping[str, str],
+                 new_symbol: Callable[[str], sp.Expr] | None = None) -> None:
+        self.text, self.names, self.hints, self.new_symbol = text, names, hints, new_symbol
 
     def _segment(self, node: ast.AST) -> str:
         return _short(ast.get_source_segment(self.text, node) or type(node).__name__)
@@ -205,11 +227,22 @@ class _Builder:
             return _CONSTANTS[name]
         if name in FUNCTIONS:
             raise InvalidInputError(f"expected {name} to be called, like {name}(x), got {name!r} alone")
+        if self.new_symbol is not None:
+            return self._new_symbol(name)
         hint = self.hints.get(name) or _GENERIC_HINTS.get(name)
-        known = ", ".join(sorted(self.names, key=str.lower))
+        known = ", ".join([*sorted(self.names, key=str.lower), "pi"])
         raise InvalidInputError(
             f"expected a known symbol, got unknown symbol {_short(name, 40)!r}"
-            + (f" ({hint})" if hint else "") + f" — known symbols: {known}, pi")
+            + (f" ({hint})" if hint else "") + f" — known symbols: {known}")
+
+    def _new_symbol(self, name: str) -> sp.Expr:
+        if name.startswith("_"):
+            raise InvalidInputError(f"expected a symbol name starting with a letter, got {_short(name, 40)!r}")
+        if name in _NOT_SYMBOLS:
+            raise InvalidInputError(f"expected a symbol, got {name!r} ({_NOT_SYMBOLS[name]})")
+        if len(name) > _MAX_NAME:
+            raise InvalidInputError(f"expected a symbol name of at most {_MAX_NAME} characters, got {len(name)}")
+        return self.new_symbol(name)  # type: ignore[misc]
 
     def _binop(self, node: ast.BinOp, depth: int) -> sp.Expr:
         op = type(node.op)
@@ -294,11 +327,13 @@ def _parse_tree(text: str) -> ast.Expression:
 
 
 def parse_expression(text: str, names: Mapping[str, sp.Expr], *, hints: Mapping[str, str] | None = None,
-                     what: str = "expression") -> sp.Expr:
+                     what: str = "expression", new_symbol: Callable[[str], sp.Expr] | None = None) -> sp.Expr:
     """The SymPy expression for ``text``, built from whitelisted pieces only (see the module docstring).
 
     ``names`` maps each allowed name to what it stands for (usually a symbol); ``hints`` adds a
-    suggestion to the error for a known-wrong name.  Raises
+    suggestion to the error for a known-wrong name.  ``new_symbol``, if given, is called with
+    each other name (a letter first, at most 64 characters, not ``e``, ``I``, ``j``, ``oo``) and
+    returns what it stands for; without it such names are refused.  Raises
     :class:`~mechderive.errors.InvalidInputError` naming the offending piece.
 
     >>> import sympy as sp
@@ -306,10 +341,13 @@ def parse_expression(text: str, names: Mapping[str, sp.Expr], *, hints: Mapping[
     Traceback (most recent call last):
     ...
     mechderive.errors.InvalidInputError: expected a call of one of sin, cos, ..., dt, got a call of '__import__'
+    >>> h = sp.Symbol("h", positive=True)
+    >>> parse_expression("-h/2 - d", {"h": h}, new_symbol=lambda n: sp.Symbol(n, positive=True))
+    -d - h/2
     """
     source = _check_text(text, what)
     tree = _parse_tree(source.strip())
-    expr = _Builder(source.strip(), names, hints or {}).build(tree.body)
+    expr = _Builder(source.strip(), names, hints or {}, new_symbol).build(tree.body)
     if expr.has(sp.zoo, sp.nan, sp.oo, -sp.oo):
         raise InvalidInputError(f"expected a finite expression, got {expr} from {_short(text)!r}")
     return expr
@@ -329,3 +367,110 @@ def parse_claim(text: str, names: Mapping[str, sp.Expr], *, hints: Mapping[str, 
     return (parse_expression(left, names, hints=hints, what=f"left-hand side of the {what}"),
             parse_expression(right, names, hints=hints, what=f"right-hand side of the {what}"))
 
+
+
+# ------------------------------------------------------------------------------------ numbers
+_PLAIN_NUMBER = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE]([+-]?[0-9]+))?")
+
+
+def _in_range(value: sp.Rational, label: str, text: str) -> sp.Rational:
+    bound = sp.Integer(10) ** MAX_MAGNITUDE
+    if value != 0 and not (1 / bound <= abs(value) <= bound):
+        raise InvalidInputError(f"{label}: expected a number 0 or of magnitude 1e-{MAX_MAGNITUDE} to "
+                                f"1e{MAX_MAGNITUDE}, got {_short(text)!r}")
+    return value
+
+
+def parse_number(text: str, label: str = "number") -> sp.Rational:
+    """The exact rational number written in ``text``: a decimal (``9.81``, ``-1.5e-3``, ``0.1`` is 1/10),
+    or arithmetic of numbers (``1/3``, ``2**-10``) parsed like :func:`parse_expression`.
+
+    The number must be 0 or of magnitude 10^-:data:`MAX_MAGNITUDE` … 10^:data:`MAX_MAGNITUDE`; the
+    size is checked on the text's exponent before any arithmetic, so ``1e999999999`` is refused at
+    once.  Errors start with ``label`` (e.g. ``--set g``), the argument the text came from.
+
+    >>> parse_number("9.81"), parse_number("-1/3"), parse_number("2.5e-3")
+    (981/100, -1/3, 1/400)
+    >>> parse_number("1e999999999", "--set g")
+    Traceback (most recent call last):
+    ...
+    mechderive.errors.InvalidInputError: --set g: expected a number 0 or of magnitude 1e-300 to 1e300, got '1e999999999'
+    """
+    try:
+        source = _check_text(text, "number").strip()
+    except InvalidInputError as exc:
+        raise InvalidInputError(f"{label}: {exc}") from None
+    plain = _PLAIN_NUMBER.fullmatch(source)
+    if plain is not None:
+        # The mantissa has at most MAX_LENGTH digits, so a larger written exponent is out of range
+        # whatever the digits; below that, Fraction's exact arithmetic takes microseconds.
+        if plain.group(1) is not None and abs(int(plain.group(1))) > MAX_MAGNITUDE + MAX_LENGTH:
+            return _in_range(sp.Integer(10) ** (MAX_MAGNITUDE + 1), label, source)
+        f = Fraction(source)
+        return _in_range(sp.Rational(f.numerator, f.denominator), label, source)
+    try:
+        value = parse_expression(source, {}, what="number")
+    except InvalidInputError as exc:
+        raise InvalidInputError(f"{label}: expected a number like 9.81, -1.5e-3 or 1/3, got {_short(source)!r}: "
+                                f"{exc}") from None
+    if not isinstance(value, sp.Rational):
+        raise InvalidInputError(f"{label}: expected a rational number like 9.81, -1.5e-3 or 1/3, got "
+                                f"{_short(source)!r} = {_short(str(value))}")
+    return _in_range(value, label, source)
+
+
+# ----------------------------------------------------------------------- values from a program
+def _describe(value: Any) -> str:
+    if isinstance(value, (str, bytes)):
+        return (f"the text {_short(repr(value))} (text is never evaluated: build the expression from SymPy "
+                f"symbols, or parse it with mechderive.formulas.parse_expression)")
+    return f"{type(value).__name__} {_short(repr(value))}"
+
+
+def as_expression(value: Any, what: str = "the value") -> sp.Expr:
+    """``value`` as a SymPy expression, for symbolic APIs called by a program.
+
+    SymPy expressions pass unchanged, Python and NumPy numbers become SymPy numbers; anything
+    else — text above all, which ``sympify`` would evaluate as Python, and containers, whose
+    strings it would evaluate too — is refused with an
+    :class:`~mechderive.errors.InvalidInputError` naming ``what``.
+
+    >>> as_expression(2.5), as_expression(sp.Symbol("x") + 1)
+    (2.50000000000000, x + 1)
+    >>> as_expression("__import__('os')", "`angle`")
+    Traceback (most recent call last):
+    ...
+    mechderive.errors.InvalidInputError: expected `angle` to be a SymPy expression or a number, got the text ...
+    """
+    if isinstance(value, sp.Expr):
+        return value
+    if isinstance(value, numbers.Number) and not isinstance(value, bool):
+        try:
+            converted = sp.sympify(value, strict=True)
+        except (sp.SympifyError, TypeError, ValueError):
+            converted = None
+        if isinstance(converted, sp.Expr):
+            return converted
+    raise InvalidInputError(f"expected {what} to be a SymPy expression or a number, got {_describe(value)}")
+
+
+def as_matrix(value: Any, what: str = "the value") -> sp.Matrix:
+    """``value`` (a SymPy matrix, or a list, tuple or array of rows or of entries) as a SymPy Matrix,
+    each entry checked by :func:`as_expression` (so no text inside is ever evaluated).
+
+    >>> as_matrix([1, sp.Symbol("x"), 0.5]).T
+    Matrix([[1, x, 0.5]])
+    """
+    if isinstance(value, sp.MatrixBase):
+        return sp.Matrix(value)
+    if hasattr(value, "tolist") and not isinstance(value, sp.Basic):  # a NumPy array
+        value = value.tolist()
+    if isinstance(value, (list, tuple)):
+        rows = [[as_expression(e, f"each entry of {what}") for e in row] if isinstance(row, (list, tuple))
+                else as_expression(row, f"each entry of {what}") for row in value]
+        try:
+            return sp.Matrix(rows)
+        except (ValueError, TypeError) as exc:
+            raise InvalidInputError(f"expected {what} to be a vector or a matrix with rows of equal length, "
+                                    f"got {_short(repr(value))}") from exc
+    return sp.Matrix([as_expression(value, what)])

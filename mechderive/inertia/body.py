@@ -11,13 +11,14 @@ coordinates (each body documents its origin and axes).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Mapping
 
 import numpy as np
 import sympy as sp
 
 from ..core.validate import as_finite_array
 from ..errors import InvalidInputError, ShapeError
+from ..formulas.parse import as_expression, as_matrix
 from .parallel_axis_theorem import parallel_axis, parallel_axis_symbolic
 from .validate import check_inertia_tensor
 
@@ -45,11 +46,11 @@ class BodyInertia:
 
     def __post_init__(self) -> None:
         if self.is_symbolic:
-            com = sp.Matrix(self.centre_of_mass)
+            com = as_matrix(self.centre_of_mass, "`centre_of_mass`")
             if com.shape != (3, 1) or self.inertia_cm.shape != (3, 3):
                 raise ShapeError(f"expected a 3-vector and a 3x3 tensor, got {com.shape} and {self.inertia_cm.shape}")
             object.__setattr__(self, "centre_of_mass", com)
-            object.__setattr__(self, "mass", sp.sympify(self.mass))
+            object.__setattr__(self, "mass", as_expression(self.mass, "`mass`"))
             return
         M = as_finite_array(self.mass, "mass")
         if np.any(M <= 0):
@@ -65,7 +66,7 @@ class BodyInertia:
     def inertia_about(self, point: Any) -> Any:
         """The inertia tensor about ``point`` (body coordinates) by the parallel axis theorem (3.25)."""
         if self.is_symbolic:
-            return parallel_axis_symbolic(self.inertia_cm, self.mass, sp.Matrix(point) - self.centre_of_mass)
+            return parallel_axis_symbolic(self.inertia_cm, self.mass, as_matrix(point, "`point`") - self.centre_of_mass)
         p = as_finite_array(point, "point")
         return parallel_axis(self.inertia_cm, self.mass, p - self.centre_of_mass)
 
@@ -84,5 +85,10 @@ class BodyInertia:
         """A symbolic instance with ``values`` substituted (e.g. dimensions)."""
         if not self.is_symbolic:
             raise InvalidInputError("expected a symbolic BodyInertia to substitute into, got a numeric one")
-        return BodyInertia(self.mass.subs(values), self.centre_of_mass.subs(values), self.inertia_cm.subs(values),
-                           line_body=self.line_body)
+        if not isinstance(values, Mapping):
+            raise InvalidInputError(f"expected `values` as a mapping symbol -> value, got {type(values).__name__}")
+        # subs would evaluate text keys and values: both must be SymPy objects or numbers.
+        checked = {as_expression(k, "each key of `values`"): as_expression(v, f"the value of {k}")
+                   for k, v in values.items()}
+        return BodyInertia(self.mass.subs(checked), self.centre_of_mass.subs(checked),
+                           self.inertia_cm.subs(checked), line_body=self.line_body)

@@ -24,6 +24,7 @@ import sympy as sp
 
 from ..core.model import SymbolicModel, derived
 from ..errors import InvalidInputError
+from ..formulas.parse import as_expression
 from .body import BodyInertia
 from .regions import Region
 from .tensor import point_mass_tensor
@@ -43,7 +44,7 @@ class DensityModel(SymbolicModel):
 
     def __init__(self, density: sp.Expr, region: Region) -> None:
         super().__init__()
-        self.density = sp.sympify(density)
+        self.density = as_expression(density, "the density")
         self.region = region
 
     @derived
@@ -88,10 +89,7 @@ def density_model(density: sp.Expr, region: Region) -> DensityModel:
 
 def _as_density(density: Any, region: Region) -> sp.Expr:
     expr = density(*region.coordinates) if callable(density) and not isinstance(density, sp.Basic) else density
-    try:
-        expr = sp.sympify(expr)
-    except (sp.SympifyError, TypeError) as exc:
-        raise InvalidInputError(f"expected a SymPy expression or callable for the density, got {density!r}") from exc
+    expr = as_expression(expr, "the density (a SymPy expression, or a callable returning one)")
     names = {c.name: c for c in region.coordinates}
     impostors = [s for s in expr.free_symbols if s.name in names and s != names[s.name]]
     if impostors:

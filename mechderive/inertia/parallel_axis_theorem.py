@@ -107,8 +107,10 @@ def parallel_axis_symbolic(inertia_cm: Any, mass: Any, c: Any) -> sp.Matrix:
     >>> parallel_axis_symbolic(sp.diag(M*l**2/12, M*l**2/12, 0), M, (0, 0, l/2))[0, 0]
     M*l**2/3
     """
+    from ..formulas.parse import as_matrix
+
     parallel_axis_model().linear_terms_at_centre_of_mass  # the theorem, derived once per process
-    I_cm = sp.Matrix(inertia_cm)
+    I_cm = as_matrix(inertia_cm, "`inertia_cm`")
     if I_cm.shape != (3, 3):
         raise ShapeError(f"expected `inertia_cm` of shape (3, 3), got {I_cm.shape}")
     return (I_cm + point_mass_tensor(mass, c)).applyfunc(sp.factor)

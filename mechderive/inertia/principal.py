@@ -70,7 +70,9 @@ def principal_axes_symbolic(inertia: Any) -> tuple[list[sp.Expr], sp.Matrix]:
     [-sqrt(2)/2,  sqrt(2)/2, 0],
     [-sqrt(2)/2, -sqrt(2)/2, 0]])
     """
-    I = sp.Matrix(inertia)
+    from ..formulas.parse import as_matrix
+
+    I = as_matrix(inertia, "`inertia`")
     if I.shape != (3, 3):
         raise ShapeError(f"expected `inertia` of shape (3, 3), got {I.shape}")
     if not (I - I.T).applyfunc(sp.simplify).is_zero_matrix:

@@ -30,6 +30,7 @@ import sympy as sp
 
 from ..errors import DerivationError, InvalidInputError, ShapeError
 from ..core.simplify import trig_normal
+from ..formulas.parse import as_expression
 
 __all__ = ["Region", "box", "solid_of_revolution", "x", "y", "z", "r", "vartheta", "varphi"]
 
@@ -62,8 +63,16 @@ class Region:
             raise ShapeError(f"expected a position with 3 components, got {len(self.position)}")
         if not 1 <= len(self.limits) <= 3:
             raise ShapeError(f"expected 1 to 3 coordinates (curve, surface or solid), got {len(self.limits)}")
-        object.__setattr__(self, "position", tuple(sp.sympify(p) for p in self.position))
-        object.__setattr__(self, "limits", tuple((v, sp.sympify(a), sp.sympify(b)) for v, a, b in self.limits))
+        # Programs pass SymPy objects here; text would be evaluated by sympify, so it is refused.
+        object.__setattr__(self, "position", tuple(as_expression(p, "each `position` component")
+                                                   for p in self.position))
+        limits = []
+        for limit in self.limits:
+            if not (isinstance(limit, (tuple, list)) and len(limit) == 3 and isinstance(limit[0], sp.Symbol)):
+                raise InvalidInputError(f"expected each limit as (symbol, lower, upper), got {limit!r}")
+            v, a, b = limit
+            limits.append((v, as_expression(a, f"the lower limit of {v}"), as_expression(b, f"the upper limit of {v}")))
+        object.__setattr__(self, "limits", tuple(limits))
         for v, a, b in self.limits:
             if a.is_number and b.is_number and not bool(a < b):
                 raise InvalidInputError(f"expected lower < upper limit for {v}, got {a} and {b}")
@@ -87,7 +96,7 @@ class Region:
     def sample_points(self, count: int = 7, seed: int = 3) -> list[dict[sp.Symbol, float]]:
         """Seeded interior points (other symbols set to values in (0.5, 2)), for sign checks."""
         rng = random.Random(seed)
-        others = sorted(set().union(*(sp.sympify(e).free_symbols for e in self._all_exprs()))
+        others = sorted(set().union(*(e.free_symbols for e in self._all_exprs()))
                         - set(self.coordinates), key=sp.default_sort_key)
         points = []
         for _ in range(count):
@@ -123,7 +132,7 @@ def _pair(value: Any, name: str) -> tuple[sp.Expr, sp.Expr]:
         lo, hi = value
     except (TypeError, ValueError) as exc:
         raise InvalidInputError(f"expected `{name}` as a pair (lower, upper), got {value!r}") from exc
-    return sp.sympify(lo), sp.sympify(hi)
+    return as_expression(lo, f"the lower end of `{name}`"), as_expression(hi, f"the upper end of `{name}`")
 
 
 def box(x_range: Any, y_range: Any, z_range: Any) -> Region:
@@ -146,7 +155,7 @@ def solid_of_revolution(radius: Any, z_range: Any) -> Region:
     >>> solid_of_revolution(1 - z, (0, 1)).measure()
     r
     """
-    R = sp.sympify(radius)
+    R = as_expression(radius, "`radius`")
     z0, z1 = _pair(z_range, "z_range")
     stray = {s for s in R.free_symbols if s.name == "z" and s != z}
     if stray:

@@ -149,18 +149,22 @@ def point_mass_tensor(mass: Any, position: Any) -> sp.Matrix:
     [0, M*c**2,      0],
     [0,      0, M*c**2]])
     """
+    from ..formulas.parse import as_expression, as_matrix
+
     pm = point_mass_model(1)
-    pos = sp.Matrix(position)
+    pos = as_matrix(position, "`position`")
     if pos.shape != (3, 1) and pos.shape != (1, 3):
         raise ShapeError(f"expected `position` with 3 components, got shape {pos.shape}")
-    subs = {pm.masses[0]: sp.sympify(mass), **{s: v for s, v in zip(pm.positions[0], pos)}}
+    subs = {pm.masses[0]: as_expression(mass, "`mass`"), **{s: v for s, v in zip(pm.positions[0], pos)}}
     return pm.inertia_tensor.subs(subs, simultaneous=True)
 
 
 def inertia_tensor_symbolic(masses: Any, positions: Any) -> sp.Matrix:
     """Σ_i of :func:`point_mass_tensor` — (3.19) for SymPy masses and positions."""
+    from ..formulas.parse import as_matrix
+
     masses = list(masses)
-    positions = [sp.Matrix(p) for p in positions]
+    positions = [as_matrix(p, "each position") for p in positions]
     if len(masses) != len(positions):
         raise ShapeError(f"expected as many positions as masses ({len(masses)}), got {len(positions)}")
     return sum((point_mass_tensor(m, p) for m, p in zip(masses, positions)), sp.zeros(3, 3))

@@ -61,7 +61,9 @@ class MechanicsModel:
             name = q.func.__name__
             subs[q.diff(t, 2)] = state_symbol(name + "_ddot")
             subs[q.diff(t)] = state_symbol(name + "_dot")
-        out = sp.sympify(expr).subs(subs)
+        from ..formulas.parse import as_expression
+
+        out = (expr if isinstance(expr, sp.MatrixBase) else as_expression(expr, "`expr`")).subs(subs)
         return out.subs({q: state_symbol(q.func.__name__) for q in self.coordinates})
 
     def mass_matrix(self) -> sp.Matrix:

@@ -169,7 +169,11 @@ def axis_rotation(axis: int, angle: Any) -> sp.Matrix:
     [-sin(phi), cos(phi), 0],
     [        0,        0, 1]])
     """
+    from ..formulas.parse import as_expression
+
     m = model()
+    if axis in (1, 2, 3):
+        angle = as_expression(angle, "`angle`")  # subs would evaluate text
     if axis == 1:
         return m.R1.subs(m.angle, angle)
     if axis == 3:
@@ -187,10 +191,12 @@ def euler_rotation(phi: Any, theta: Any, psi: Any) -> sp.Matrix:
     >>> R == axis_rotation(3, sp.Symbol("psi")) * axis_rotation(1, sp.Symbol("theta")) * axis_rotation(3, sp.Symbol("phi"))
     True
     """
+    from ..formulas.parse import as_expression
+
     m = model()
     names = ("phi", "theta", "psi")
-    return m.state_rotation.subs({state_symbol(n): sp.sympify(v) for n, v in zip(names, (phi, theta, psi))},
-                                 simultaneous=True)
+    angles = {state_symbol(n): as_expression(v, f"`{n}`") for n, v in zip(names, (phi, theta, psi))}
+    return m.state_rotation.subs(angles, simultaneous=True)
 
 
 # The numeric functions live in rotations.py (no SymPy needed there); re-exported here.
