@@ -33,6 +33,19 @@ def _key(exprs: Any, args: Sequence[Any]) -> str:
     return hashlib.sha256(text.encode()).hexdigest()
 
 
+def _checked(flat: list[Any], args: Sequence[Any]) -> tuple[list[Any], list[Any]]:
+    """The entries as SymPy objects and the arguments as symbols; ``lambdify`` would run text as code."""
+    import sympy as sp
+
+    from .symbols import as_symbolic
+
+    entries = [as_symbolic(e, "each expression to compile") for e in flat]
+    for a in args:
+        if not isinstance(a, (sp.Symbol, sp.Dummy)):
+            raise ArgumentError(f"expected each argument of a compiled function to be a SymPy Symbol, got {a!r}"[:300])
+    return entries, list(args)
+
+
 def compile_expressions(exprs: Any, args: Sequence[Any], *, name: str = "f") -> Callable[..., Any]:
     """Return a vectorised NumPy function evaluating ``exprs`` at ``args``.
 
@@ -75,6 +88,7 @@ def compile_expressions(exprs: Any, args: Sequence[Any], *, name: str = "f") -> 
     else:
         shape = ()
         flat = [exprs]
+    flat, args = _checked(flat, args)
     raw = sp.lambdify(list(args), flat, modules="numpy", cse=True)
     compiled = wrap_vectorised(raw, [str(a) for a in args], shape, name)
     with _LOCK:
@@ -141,6 +155,7 @@ def compile_scalar(exprs: Any, args: Sequence[Any], *, name: str = "f") -> Calla
             _STATS["hits"] += 1
             return hit
     flat = list(exprs) if isinstance(exprs, (sp.MatrixBase, list, tuple)) else [exprs]
+    flat, args = _checked(flat, args)
     raw = sp.lambdify(list(args), flat, modules="math", cse=True)
     raw.__doc__ = f"{name}({', '.join(map(str, args))}) -> list of {len(flat)} floats"
     with _LOCK:

@@ -18,7 +18,9 @@ __all__ = ["show", "derivation_args", "display_symbols"]
 
 def display_symbols(expr: Any) -> Any:
     """``expr`` with q_dot, q_ddot renamed qdot, qddot, which SymPy prints as q̇, q̈ (and \\dot{q} in LaTeX)."""
-    expr = sp.sympify(expr)
+    from .symbols import as_symbolic
+
+    expr = as_symbolic(expr)
     subs = {}
     for s in expr.free_symbols:
         for suffix in ("_ddot", "_dot"):

@@ -56,14 +56,14 @@ from ..errors import DerivationError, InvalidInputError
 from .compile import compile_scalar
 from .model import SymbolicModel, derived
 from .simplify import is_zero, trig_normal
-from .symbols import state_symbol, t, to_state_symbols
+from .symbols import as_symbolic, state_symbol, t, to_state_symbols
 
 __all__ = ["LagrangianModel", "from_state_symbols", "vanishes"]
 
 
 def vanishes(expr: Any) -> bool:
     """Whether ``expr`` is identically zero: exactly for trigonometric rational functions, else ``sp.simplify``."""
-    expr = sp.sympify(expr)
+    expr = as_symbolic(expr)
     if expr == 0:
         return True
     decided = is_zero(expr)
@@ -95,7 +95,7 @@ def from_state_symbols(expr: Any, coordinates: Sequence[sp.Expr]) -> Any:
         subs[state_symbol(n)] = q
         subs[state_symbol(n + "_dot")] = q.diff(t)
         subs[state_symbol(n + "_ddot")] = q.diff(t, 2)
-    return sp.sympify(expr).xreplace(subs)
+    return as_symbolic(expr).xreplace(subs)
 
 
 def _check_coordinates(coordinates: Sequence[Any]) -> tuple[sp.Expr, ...]:
@@ -115,10 +115,7 @@ def _check_coordinates(coordinates: Sequence[Any]) -> tuple[sp.Expr, ...]:
 
 def _check_lagrangian(lagrangian: Any, coordinates: tuple[sp.Expr, ...]) -> sp.Expr:
     """``lagrangian`` as a SymPy scalar expression in ``coordinates``, their velocities and t, or raise."""
-    try:
-        L = sp.sympify(lagrangian)
-    except (sp.SympifyError, TypeError) as exc:
-        raise InvalidInputError(f"expected the Lagrangian as a SymPy expression, got {lagrangian!r}") from exc
+    L = as_symbolic(lagrangian, "the Lagrangian")
     if not isinstance(L, sp.Expr) or getattr(L, "is_Matrix", False):
         raise InvalidInputError(f"expected the Lagrangian as a scalar SymPy expression, got {type(L).__name__}")
     names = {_name(q) + suffix: _name(q) for q in coordinates for suffix in ("", "_dot", "_ddot")}

@@ -17,6 +17,8 @@ from typing import Any
 
 import sympy as sp
 
+from .symbols import as_symbolic
+
 __all__ = ["trig_normal", "is_zero", "simplify_trig"]
 
 
@@ -49,7 +51,7 @@ def trig_normal(expr: Any) -> sp.Expr:
     (trigonometric functions of sums are expanded first).  The result is a
     ratio of reduced polynomials; it is 0 iff ``expr`` is identically 0.
     """
-    expr = sp.expand_trig(sp.sympify(expr))
+    expr = sp.expand_trig(as_symbolic(expr))
     num, den = sp.fraction(sp.together(expr))
     sym, _, back, rels = _trig_symbols(num)
     num_r = _reduce_poly(sym, rels)
@@ -68,7 +70,7 @@ def is_zero(expr: Any) -> bool | None:
     exponentials, unknown functions) the result is ``None`` and the caller must
     use another method.
     """
-    expr = sp.sympify(expr).replace(sp.tan, lambda x: sp.sin(x) / sp.cos(x))
+    expr = as_symbolic(expr).replace(sp.tan, lambda x: sp.sin(x) / sp.cos(x))
     expr = sp.expand_trig(expr)
     num, _ = sp.fraction(sp.together(expr))
     sym, _, _, rels = _trig_symbols(num)

@@ -10,13 +10,14 @@ files: ``phi, theta, psi, phi_dot, theta_dot, psi_dot, phi_ddot, ...``.
 from __future__ import annotations
 
 import functools
+import numbers
 from typing import Any
 
 import sympy as sp
 
 from ..errors import InvalidInputError
 
-__all__ = ["t", "coordinate", "euler_angles", "state_symbol", "to_state_symbols"]
+__all__ = ["t", "coordinate", "euler_angles", "state_symbol", "to_state_symbols", "as_symbolic"]
 
 #: The time symbol.
 t = sp.Symbol("t", real=True)
@@ -42,6 +43,34 @@ def state_symbol(name: str) -> sp.Symbol:
 _SUFFIX = {0: "", 1: "_dot", 2: "_ddot"}
 
 
+def as_symbolic(value: Any, what: str = "the expression") -> Any:
+    """``value`` as a SymPy object without ever reading text as code.
+
+    SymPy expressions and matrices pass unchanged; Python and NumPy numbers become SymPy
+    numbers; lists and tuples become matrices of such entries.  Text is refused: a plain
+    ``sympify`` would evaluate it as Python (``sympify("__import__('os')...")``).
+
+    >>> as_symbolic(2) + as_symbolic(sp.Symbol("x"))
+    x + 2
+    >>> as_symbolic("x + 1")
+    Traceback (most recent call last):
+    ...
+    mechderive.errors.InvalidInputError: expected the expression to be a SymPy expression or a number, got the text 'x + 1'
+    """
+    if isinstance(value, (sp.Basic, sp.MatrixBase)):
+        return value
+    if isinstance(value, (list, tuple)) and value:
+        return sp.Matrix([as_symbolic(v, what) if not isinstance(v, (list, tuple)) else
+                          [as_symbolic(x, what) for x in v] for v in value])
+    if isinstance(value, numbers.Number) and not isinstance(value, bool):
+        try:
+            return sp.sympify(value, strict=True)
+        except (sp.SympifyError, TypeError, ValueError):
+            pass
+    shown = f"the text {value!r}" if isinstance(value, str) else f"a {type(value).__name__}"
+    raise InvalidInputError(f"expected {what} to be a SymPy expression or a number, got {shown[:200]}")
+
+
 def to_state_symbols(expr: Any) -> Any:
     """Replace q(t), q'(t), q''(t) in ``expr`` by symbols q, q_dot, q_ddot.
 
@@ -49,7 +78,7 @@ def to_state_symbols(expr: Any) -> Any:
     >>> to_state_symbols(sp.diff(phi**2, t))
     2*phi*phi_dot
     """
-    expr = sp.sympify(expr)
+    expr = as_symbolic(expr)
     subs: dict[Any, Any] = {}
     for d in expr.atoms(sp.Derivative):
         if isinstance(d.expr, sp.core.function.AppliedUndef) and d.variables and set(d.variables) == {t}:
