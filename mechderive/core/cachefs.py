@@ -27,7 +27,8 @@ only way either of them touches that folder, and it trusts nothing it finds ther
   ``fsync``-ed and published with ``os.replace``: readers see the old file or the new one, never
   half of one, and a failed write leaves nothing behind.
 
-What this cannot stop: a process of the *same* uid (or root) can rewrite the folder and its
+The checks need POSIX uids and the ``*at`` system calls; where they are missing there is no disk
+cache at all.  What this cannot stop: a process of the *same* uid (or root) can rewrite the folder and its
 hashes alike — but it can equally edit the user's shell profile; the checks make the cache no
 weaker than the user's home directory.
 """
