@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import atexit
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -14,8 +16,11 @@ import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
 
-# Compiled code goes to a disk cache; the suite uses its own, never the user's ~/.cache.
-os.environ.setdefault("MECHDERIVE_CACHE_DIR", tempfile.mkdtemp(prefix="mechderive-test-cache-"))
+# Compiled code goes to a disk cache; the suite uses its own, never the user's ~/.cache, and removes
+# it when the session ends (mkdtemp makes it 0700, as the cache requires of its folders).
+if not os.environ.get("MECHDERIVE_CACHE_DIR"):
+    os.environ["MECHDERIVE_CACHE_DIR"] = tempfile.mkdtemp(prefix="mechderive-test-cache-")
+    atexit.register(shutil.rmtree, os.environ["MECHDERIVE_CACHE_DIR"], ignore_errors=True)
 
 
 @pytest.fixture(autouse=True)

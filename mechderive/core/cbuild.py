@@ -11,10 +11,20 @@ library:
   fall back to their Python/SciPy path and say so;
 * flags: ``-O2 -fPIC -shared -lm`` — no ``-ffast-math``, so IEEE semantics (and NaN
   checks) are kept and results do not depend on the optimiser's reassociation;
-* the library is cached like generated Python code (:mod:`.codecache`): in the cache
-  directory's folder for this package's fingerprint, named by the function name, the
-  machine and the compiler, so a warm process neither derives (no SymPy import) nor
-  compiles; with the disk cache off it is built in a private temporary folder per process.
+* the library is cached like generated Python code (:mod:`.codecache`), in the ``c/`` folder of
+  the cache directory's folder for this package's fingerprint, named by the function name, the
+  machine and the compiler, so a warm process neither derives (no SymPy import) nor compiles;
+* what is checked before a cached library is loaded (folder and file rules of :mod:`.cachefs`):
+  the folders are ours and writable by nobody else (else one warning and no disk cache), the
+  library is a regular file of this uid, and its bytes match the SHA-256 (of its name and
+  content) that the build wrote atomically into ``<library>.so.sha256``.  The verified *bytes*
+  are what is loaded — through an in-memory file (``memfd``), else a private copy — never the
+  cache file by name, so nothing can swap it between the check and ``dlopen``.  A library that
+  does not verify (truncated: never mapped, so no SIGBUS; random bytes; a foreign library; the
+  library of another system or name) or that this machine cannot load is rebuilt and replaced;
+* the compiler runs in a private temporary folder removed on every path out (errors, timeout,
+  Ctrl-C), with ``-pipe``; with the disk cache off, refused or read-only, the library is built
+  there and loaded from memory, and nothing is left in ``$TMPDIR``.
 """
 
 from __future__ import annotations
@@ -32,16 +42,18 @@ from pathlib import Path
 from typing import Callable
 
 from ..errors import MechDeriveError
-from . import codecache
+from . import cachefs, codecache
 
 __all__ = ["compiler", "c_enabled", "set_c_enabled", "load_library", "load_or_none", "why_unavailable", "CBuildError",
-           "build_log"]
+           "build_log", "clear_memory"]
 
 _FLAGS = ("-O2", "-fPIC", "-shared")
 _MEMORY: dict[str, ctypes.CDLL] = {}
 _LOCK = threading.Lock()
 _ENABLED: list[bool | None] = [None]
-_TMP: list[str] = []
+#: The in-memory files the libraries were loaded from (see _open_bytes), open for the process.
+_FDS: list[int] = []
+_COMPILE_SECONDS = 120
 #: Why a library could not be built or loaded in this process, by name (see load_or_none).
 _FAILED: dict[str, str] = {}
 #: (name, 'built' | 'disk', seconds) for each library obtained in this process; seconds exclude the
@@ -56,6 +68,14 @@ class CBuildError(MechDeriveError, RuntimeError):
 def build_log() -> list[tuple[str, str, float]]:
     """(name, 'built' | 'disk', seconds) for each C library obtained in this process, in order."""
     return list(_LOG)
+
+
+def clear_memory() -> None:
+    """Forget the libraries held in memory, so the next request reads the disk cache again (loaded
+    code stays mapped: objects built on it keep working); for tests."""
+    with _LOCK:
+        _MEMORY.clear()
+        _FAILED.clear()
 
 
 def set_c_enabled(enabled: bool | None) -> None:
@@ -83,62 +103,134 @@ def compiler() -> str | None:
     return None
 
 
-def _library_path(name: str, *, private: bool = False) -> Path:
+def _library_name(name: str) -> str:
+    """The cache file of library ``name``: the function name, and a tag of the machine, the system
+    and the compiler, so a cache shared between machines keeps one library per kind of machine."""
     cc = compiler() or "none"
     tag = hashlib.sha256(f"{platform.machine()}|{platform.system()}|{cc}|{' '.join(_FLAGS)}".encode()).hexdigest()[:12]
     safe = "".join(c if c.isalnum() or c in "._-" else "_" for c in name)
-    if codecache.disk_cache_enabled() and not private:
-        return codecache.cache_dir() / codecache.fingerprint() / "c" / f"{safe}-{tag}.so"
-    if not _TMP:
-        _TMP.append(tempfile.mkdtemp(prefix="mechderive-c-"))
-    return Path(_TMP[0]) / f"{safe}-{tag}.so"
+    return f"{safe}-{tag}.so"
 
 
-def _build(source: str, target: Path) -> None:
+def _library_path(name: str) -> Path:
+    """Where the library ``name`` is kept in the disk cache (for reading; loads go through :mod:`.cachefs`)."""
+    return codecache.cache_dir() / codecache.fingerprint() / "c" / _library_name(name)
+
+
+def _cache_folder(create: bool):  # -> context manager of a checked folder descriptor or None
+    return cachefs.directory(codecache.cache_dir(), (codecache.fingerprint(), "c"), create=create)
+
+
+def _compile(source: str, file: str) -> bytes:
+    """The bytes of the shared library built from ``source``.
+
+    The compiler works in a private temporary folder (mode 0700) that is removed on every path
+    out — success, a compiler error, a timeout, Ctrl-C — so nothing is left in ``$TMPDIR``.
+    """
     cc = compiler()
     if cc is None:  # pragma: no cover - callers check c_enabled() first
         raise CBuildError("expected a C compiler (cc, gcc or clang on PATH, or $CC), found none")
-    target.parent.mkdir(parents=True, exist_ok=True, mode=0o700)
-    with tempfile.TemporaryDirectory(dir=target.parent) as tmp:
-        src = Path(tmp) / (target.stem + ".c")
+    stem = file[:-len(".so")]
+    with tempfile.TemporaryDirectory(prefix="mechderive-c-", ignore_cleanup_errors=True) as tmp:
+        src, out = Path(tmp) / f"{stem}.c", Path(tmp) / file
         src.write_text(source)
-        out = Path(tmp) / target.name
-        proc = subprocess.run([cc, *_FLAGS, "-o", str(out), str(src), "-lm"], capture_output=True, text=True,
-                              timeout=120)
+        try:  # -pipe: no compiler temporaries in $TMPDIR either
+            proc = subprocess.run([cc, *_FLAGS, "-pipe", "-o", str(out), str(src), "-lm"], capture_output=True,
+                                  text=True, timeout=_COMPILE_SECONDS)
+        except subprocess.TimeoutExpired as exc:
+            raise CBuildError(f"expected {cc} to compile the generated {stem}.c within {_COMPILE_SECONDS} s, "
+                              f"it did not") from exc
         if proc.returncode != 0:
-            raise CBuildError(f"expected {cc} to compile the generated {target.stem}.c, got exit code "
+            raise CBuildError(f"expected {cc} to compile the generated {stem}.c, got exit code "
                               f"{proc.returncode}:\n{proc.stderr.strip()[:2000]}")
-        # keep the source next to the library, for reading; then publish atomically
-        os.replace(src, target.with_suffix(".c"))
-        os.replace(out, target)
+        return out.read_bytes()
+
+
+def _open_bytes(data: bytes, file: str) -> ctypes.CDLL:
+    """Load the library whose verified bytes are ``data``, never a file that could change after
+    the check: an anonymous in-memory file (``memfd``, kept open for the process so that its
+    ``/proc/self/fd`` name is never reused), else a copy in a private temporary folder removed
+    as soon as it is loaded.  Raises OSError if the system cannot load it."""
+    try:
+        fd = os.memfd_create(file, getattr(os, "MFD_CLOEXEC", 0))
+    except (AttributeError, OSError):  # not Linux
+        fd = None
+    if fd is not None:
+        path = f"/proc/self/fd/{fd}"
+        try:
+            view = memoryview(data)
+            while view:
+                view = view[os.write(fd, view):]
+            lib = ctypes.CDLL(path) if os.path.exists(path) else None
+        except OSError:  # no exec from memfd here (vm.memfd_noexec), or a library this system rejects
+            lib = None
+        except BaseException:
+            os.close(fd)
+            raise
+        if lib is not None:
+            _FDS.append(fd)
+            return lib
+        os.close(fd)  # try the private copy; a library the system rejects fails there too
+    with tempfile.TemporaryDirectory(prefix="mechderive-c-", ignore_cleanup_errors=True) as tmp:
+        copy = Path(tmp) / file
+        copy.write_bytes(data)
+        return ctypes.CDLL(str(copy))  # mapped: removing the file afterwards is fine
+
+
+def _load_cached(file: str) -> ctypes.CDLL | None:
+    """The cached library if it is ours and its bytes match the SHA-256 recorded beside it, else None."""
+    with _cache_folder(create=False) as folder:
+        if folder is None:
+            return None
+        recorded = cachefs.read_file(folder, file + ".sha256", limit=256)
+        data = cachefs.read_file(folder, file)
+    if not data or not recorded or recorded.strip() != cachefs.digest(file, data).encode():
+        return None  # absent, edited, truncated, foreign or another system's: rebuilt, never loaded
+    try:
+        return _open_bytes(data, file)
+    except OSError:  # verified, yet this system cannot load it (a cache shared across machines): rebuilt
+        return None
+
+
+def _store(file: str, source: str, data: bytes) -> None:
+    """Keep the library (and its C source, for reading) in the disk cache; quietly nothing if refused
+    or read-only.  The hash is written after the library: a reader catching the two mid-update
+    sees a mismatch and rebuilds, never a hash vouching for a library not yet written."""
+    with _cache_folder(create=True) as folder:
+        if folder is None:
+            return
+        cachefs.write_file(folder, file[:-len(".so")] + ".c", source.encode())
+        if cachefs.write_file(folder, file, data):
+            cachefs.write_file(folder, file + ".sha256", cachefs.digest(file, data).encode() + b"\n")
 
 
 def load_library(name: str, build_source: Callable[[], str]) -> ctypes.CDLL:
     """The shared library ``name``: from memory, from the cache folder, or built from ``build_source()``.
 
-    ``build_source`` is called only when the library is not cached; it returns the complete C
-    source.  Raises :class:`CBuildError` if compilation fails.  Callers check :func:`c_enabled`.
+    ``build_source`` is called only when the library is not cached (or its cached copy does not
+    verify, see the module docstring); it returns the complete C source.  Raises
+    :class:`CBuildError` if compilation fails.  Callers check :func:`c_enabled`.
     """
     with _LOCK:
         lib = _MEMORY.get(name)
         if lib is not None:
             return lib
         start = time.perf_counter()
-        path = _library_path(name)
+        file = _library_name(name)
+        disk = codecache.disk_cache_enabled()
+        lib = _load_cached(file) if disk else None
         how = "disk"
-        if not path.exists():
+        if lib is None:
             from .model import derivation_seconds
 
             before = derivation_seconds()
             source = build_source()
             start += derivation_seconds() - before  # the derivation is reported as such, not as compiling
-            try:
-                _build(source, path)
-            except OSError:  # a read-only or full cache folder: build privately for this process
-                path = _library_path(name, private=True)
-                _build(source, path)
+            data = _compile(source, file)
+            if disk:
+                _store(file, source, data)
+            lib = _open_bytes(data, file)
             how = "built"
-        lib = ctypes.CDLL(str(path))
         _MEMORY[name] = lib
         _LOG.append((name, how, time.perf_counter() - start))
         return lib

@@ -13,7 +13,21 @@ fingerprint of everything it was derived from — the bytes of every source file
 of the mechderive package and the versions of Python, SymPy, NumPy and mpmath.
 Any change to the package's code therefore starts a fresh cache directory.  The
 cache only ever holds code this package generated itself (never user input); it
-is safe to delete at any time (``mechderive cache --clear`` or remove the folder).
+is safe to delete at any time (remove the folder).
+
+What is checked before a cached file is executed (the folder and file rules are
+:mod:`.cachefs`'s): the cache root, the fingerprint folder and ``c/`` are created
+0700 and used only if owned by this uid and writable by nobody else — else one
+warning line and no disk cache for the run; a file is read through a descriptor
+opened relative to its checked folder without following links, and only if it is a
+regular file of this uid.  Each ``<name>.<module>.py`` starts with the SHA-256 of
+its name and content, written when it was stored; its ``.marshal`` bytecode carries
+the SHA-256 of that exact source.  A file that does not verify (edited, truncated,
+random bytes, copied from another name, planted) is never executed: the function is
+derived again and the file atomically replaced; the run succeeds either way.
+(The hash is recorded at store time rather than being the file's name computed
+from what would be generated: knowing that needs the very derivation the cache
+exists to skip.)
 
 Location: ``$MECHDERIVE_CACHE_DIR``, else ``$XDG_CACHE_HOME/mechderive``, else
 ``~/.cache/mechderive``.  Opt out with ``MECHDERIVE_NO_DISK_CACHE=1`` or
@@ -28,13 +42,13 @@ import importlib
 import inspect
 import os
 import sys
-import tempfile
 import threading
 import time
 from pathlib import Path
 from typing import Any, Callable, Sequence
 
 from ..errors import InvalidInputError
+from . import cachefs
 
 __all__ = ["cached_lambdify", "cache_dir", "fingerprint", "set_disk_cache", "disk_cache_enabled",
            "compile_log", "clear_memory"]
@@ -113,61 +127,70 @@ def clear_memory() -> None:
         _MEMORY.clear()
 
 
-def _path(name: str, module: str) -> Path:
+def _file_name(name: str, module: str) -> str:
     safe = "".join(c if c.isalnum() or c in "._-" else "_" for c in name)
-    return cache_dir() / fingerprint() / f"{safe}.{module}.py"
+    return f"{safe}.{module}.py"
 
 
-def _load(path: Path, module: str) -> tuple[Callable[..., Any], dict] | None:
-    try:
-        source = path.read_text()
-    except OSError:
-        return None
+def _path(name: str, module: str) -> Path:
+    """Where the source of ``name`` for ``module`` is kept (for reading; loads go through :mod:`.cachefs`)."""
+    return cache_dir() / fingerprint() / _file_name(name, module)
+
+
+def _load(name: str, module: str) -> tuple[Callable[..., Any], dict] | None:
+    """The cached function, or None when it is absent or does not verify (then it is rebuilt)."""
+    file = _file_name(name, module)
+    with cachefs.directory(cache_dir(), (fingerprint(),), create=False) as folder:
+        if folder is None:
+            return None
+        source = cachefs.unseal(file, cachefs.read_file(folder, file))
+        if source is None:
+            return None
+        try:
+            text = source.decode("utf-8")
+        except UnicodeDecodeError:  # pragma: no cover - sealed by us, so written by us as UTF-8
+            return None
+        code = _code(folder, file, source, text)
     meta = {}
-    for line in source.splitlines():
+    for line in text.splitlines():
         if line.startswith("# meta "):
             key, _, value = line[7:].partition("=")
             meta[key.strip()] = value.strip()
     namespace = dict(vars(importlib.import_module(module)))
-    # Our own generated code, written by _store below (see the module docstring).  Its bytecode is
-    # kept beside it (the folder is per Python version, see fingerprint): compiling the sources
-    # anew took ~25 ms of a warm run.
-    exec(_code(path, source), namespace)  # noqa: S102
-    return namespace["_lambdifygenerated"], meta
+    # Our own generated code, verified against the hash _store wrote (see the module docstring).
+    exec(code, namespace)  # noqa: S102
+    func = namespace.get("_lambdifygenerated")
+    return None if func is None else (func, meta)
 
 
-def _code(path: Path, source: str) -> Any:
+def _code(folder: int, file: str, source: bytes, text: str) -> Any:
+    """The code object of ``source``: its bytecode kept beside it (compiling anew took ~25 ms of a
+    warm run; the folder is per Python version, see fingerprint), sealed with the hash of the very
+    source it was compiled from, so a stale or edited ``.marshal`` is recompiled, never run."""
     import marshal
 
-    compiled = path.with_name(path.name + ".marshal")
-    try:
-        code = marshal.loads(compiled.read_bytes())
-        if isinstance(code, type(_code.__code__)):
-            return code
-    except (OSError, ValueError, EOFError, TypeError):
-        pass
-    code = compile(source, str(path), "exec")
-    try:
-        fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(marshal.dumps(code))
-        os.replace(tmp, compiled)
-    except OSError:
-        pass
+    compiled = file + ".marshal"
+    key = f"{compiled}|{hashlib.sha256(source).hexdigest()}"
+    payload = cachefs.unseal(key, cachefs.read_file(folder, compiled))
+    if payload is not None:
+        try:
+            code = marshal.loads(payload)
+            if isinstance(code, type(_code.__code__)):
+                return code
+        except (ValueError, EOFError, TypeError):  # pragma: no cover - verified, so ours
+            pass
+    code = compile(text, str(cache_dir() / fingerprint() / file), "exec")
+    cachefs.write_file(folder, compiled, cachefs.seal(key, marshal.dumps(code)))  # a read-only cache: no bytecode kept
     return code
 
 
-def _store(path: Path, source: str, meta: dict) -> None:
+def _store(name: str, module: str, source: str, meta: dict) -> None:
+    file = _file_name(name, module)
     header = "".join(f"# meta {k} = {v}\n" for k, v in meta.items())
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True, mode=0o700)
-        fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
-        with os.fdopen(fd, "w") as fh:
-            fh.write("# generated by mechderive.core.codecache from sympy.lambdify; safe to delete\n")
-            fh.write(header + source)
-        os.replace(tmp, path)  # atomic: concurrent processes see the old file or the new one
-    except OSError:
-        pass  # a read-only home just means no disk cache
+    text = "# generated by mechderive.core.codecache from sympy.lambdify; safe to delete\n" + header + source
+    with cachefs.directory(cache_dir(), (fingerprint(),), create=True) as folder:
+        if folder is not None:  # a refused or read-only cache just means no disk cache
+            cachefs.write_file(folder, file, cachefs.seal(file, text.encode("utf-8")))
 
 
 def cached_lambdify(name: str, build: Callable[[], tuple[Sequence[Any], Any]], *,
@@ -187,8 +210,8 @@ def cached_lambdify(name: str, build: Callable[[], tuple[Sequence[Any], Any]], *
     if hit is not None:
         return hit
     start = time.perf_counter()
-    path = _path(name, module) if disk_cache_enabled() else None
-    loaded = _load(path, module) if path is not None and path.exists() else None
+    disk = disk_cache_enabled()
+    loaded = _load(name, module) if disk else None
     if loaded is not None:
         how = "disk"
     else:
@@ -209,8 +232,8 @@ def cached_lambdify(name: str, build: Callable[[], tuple[Sequence[Any], Any]], *
             shape, flat = (), [exprs]
         func = sp.lambdify(list(args), flat, modules=module, cse=True)
         meta = {"shape": ",".join(map(str, shape)), "args": ",".join(str(a) for a in args)}
-        if path is not None:
-            _store(path, inspect.getsource(func), meta)
+        if disk:
+            _store(name, module, inspect.getsource(func), meta)
         loaded, how = (func, meta), "compiled"
     with _LOCK:
         _MEMORY.setdefault(key, loaded)
