@@ -208,6 +208,15 @@ class FreeTopSolution:
         return np.eye(3) if self.kind == "steady" else self._orient.S
 
     @property
+    def t_max(self) -> float:
+        """The largest |t| (s) evaluated: 2^50 quarter periods or turns of this motion (inf at rest).
+
+        Beyond it the count of quarter periods (or of turns, reduced mod 2π) is no longer an exact
+        integer in double precision; later times are refused.
+        """
+        return self._t_max
+
+    @property
     def precession_per_period(self) -> float:
         """φ' advance per polhode period (rad); nan on the separatrix or for a steady rotation."""
         if self.kind != "elliptic":
