@@ -253,17 +253,17 @@ def _integrate_to_rtol(run: Callable[[float], Any], estimate: Callable[[Any], fl
 
 
 def _heavy_rate_bound(scene: Scene) -> float:
-    """The fastest rate of a heavy top's motion (rad/s): max(|ω| bound, √(M g l / I1)).
+    """The fastest rate of a heavy top's motion (rad/s): the largest of the body's |ω| and √(M g l / I1).
 
-    |ω|² ≤ 2 T / min(I1, I3) and T ≤ E - V ≤ E + M g l (3.65): the body turns no faster; the
-    pendulum's rate √(M g l / I1) sets the time scale of a top let go from rest.
+    ω3 = ψ̇ + φ̇ cos θ is constant (p_ψ = I3 ω3, 3.64); ω1² + ω2² ≤ 2 T / I1 with T ≤ E - V ≤ T0 + 2 M g l
+    (3.65); the pendulum's rate √(M g l / I1) sets the time scale of a top let go from rest.
     """
     p, s = _heavy_parameters(scene), scene.initial
     I1, I3, mgl = p["I1"], p["I3"], p["M"] * p["g"] * p["l"]
     th = s["theta"]
     w3 = s["psi_dot"] + s["phi_dot"] * np.cos(th)
-    T = 0.5 * (I1 * (s["theta_dot"] ** 2 + (s["phi_dot"] * np.sin(th)) ** 2) + I3 * w3**2)
-    return float(max(np.sqrt(2.0 * (T + 2.0 * mgl) / min(I1, I3)), np.sqrt(mgl / I1)))
+    transverse = s["theta_dot"] ** 2 + (s["phi_dot"] * np.sin(th)) ** 2  # ω1² + ω2² at t = 0
+    return float(max(np.sqrt(transverse + 4.0 * mgl / I1), abs(w3), np.sqrt(mgl / I1)))
 
 
 def _check_integration_length(scene: Scene, rate: float, scaled: Scaled) -> None:

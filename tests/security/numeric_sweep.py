@@ -161,9 +161,20 @@ def limit_cases() -> Iterator[Case]:
     for c in (1e-300, 1e-150, 1e150, 1e300, 1e308):
         for method in METHODS:
             yield Case("free_top scale: (I1, I2, I3) = c (1, 2, 3)", repr(c),
-                       dict(free, parameters={"I1": c, "I2": 2 * c, "I3": min(3 * c, 1.7e308)}), method)
+                       dict(free, parameters={"I1": c, "I2": min(2 * c, 1.7e308), "I3": min(3 * c, 1.7e308)}),
+                       method)
             yield Case("heavy_top scale: I1 = I3 = c", repr(c),
                        dict(heavy, parameters={"I1": c, "I3": c, "M": 0.1, "g": 10.0, "l": 1.0}), method)
+    # time scaled: rates × c (and M g l × c² for the heavy top), t_end / c — the same motion
+    for c in (1e-150, 1e-100, 1e100, 1e150):
+        for method in METHODS:
+            yield Case("free_top scale: omega × c, t_end / c", repr(c),
+                       dict(free, initial={**free["initial"], "omega": [w * c for w in free["initial"]["omega"]]},
+                            time={**free["time"], "t_end": free["time"]["t_end"] / c}), method)
+            yield Case("heavy_top scale: rates × c, Mgl × c², t_end / c", repr(c),
+                       dict(heavy, parameters={"I1": 1.0, "I3": 0.5, "Mgl": c * c},
+                            initial={**heavy["initial"], "psi_dot": 5.0 * c},
+                            time={**heavy["time"], "t_end": heavy["time"]["t_end"] / c}), method)
     for psi_dot in (1e-300, 1e6, 1e100):
         for method in METHODS:
             yield Case("heavy_top spin", f"psi_dot = {psi_dot!r}",
