@@ -654,6 +654,9 @@ def _check_outputs(scaled: Scaled, cols: dict[str, np.ndarray]) -> dict[str, np.
     out = {}
     for q, col in cols.items():
         e = scaled.columns.get(q, 0)
+        if q in scaled.offsets:
+            out[q] = col + scaled.offsets[q]
+            continue
         if e == 0:
             out[q] = col
             continue
@@ -751,6 +754,12 @@ def run_scene(scene: Scene) -> RunResult:
     solve_compile_s = sum(s for _, _, s in compiled_since())
     drifts = system["drift"](work, cols, solution, t_work)
     cols = _check_outputs(scaled, cols)
+    if info.get("error_estimate") is not None:
+        for q in scaled.offsets:
+            if q in cols:
+                # the turns added back: the rounding of φ0 itself and of each output, a few ulp of the larger
+                info["error_estimate"] = max(info["error_estimate"], 4 * float(np.spacing(max(
+                    float(np.max(np.abs(cols[q]))), abs(scaled.original.initial[q])))))
     derived = derivation_log()[derived0:]
     compiled = compiled_since()
     derive_s = derivation_seconds() - seconds0

@@ -59,6 +59,7 @@ class Scaled:
     time: int = 0
     columns: dict[str, int] = field(default_factory=dict)
     rate: int = 0  # rad/s of the original per rad/s of the solver's units, as a power of two
+    offsets: dict[str, float] = field(default_factory=dict)  # whole turns taken off an initial angle, added back
 
     @property
     def identity(self) -> bool:
@@ -116,6 +117,25 @@ def _split_product(factors: list[float], shift: int) -> list[float] | None:
     return out
 
 
+def _scaled_time(t_end: float, j: int) -> float:
+    """t_end in units of 2^-j s (the motion's fastest rate ~2^j rad/s); refused where t_end·2^j is no double.
+
+    Such a run turns the body by ~10^308 rad: beyond every method (the closed forms count 2^51 periods
+    at most, an integration follows :data:`MAX_INTEGRATED_RADIANS`), so the bound said is the closed
+    forms' order, 2^52 rad at the fastest rate.
+    """
+    scaled = _exact_ldexp(t_end, j)
+    if scaled is None and _exponent(t_end) + j < 0:
+        raise InvalidInputError(f"scene key [time].t_end: expected at least ~{math.ldexp(1.0, -1021 - j):.3g} s for a "
+                                f"motion whose fastest rate is ~2^{j} rad/s (a shorter run turns it by less than the "
+                                f"smallest normal double, 2^-1022 rad), got {t_end!r}")
+    if scaled is None:
+        raise InvalidInputError(f"scene key [time].t_end: expected at most ~{math.ldexp(1.0, 52 - j):.3g} s for a "
+                                f"motion whose fastest rate is ~2^{j} rad/s (~2^52 rad of it: the closed forms' "
+                                f"reach), got {t_end!r}")
+    return scaled
+
+
 def _refuse_ratio(where: str, what: str) -> None:
     raise InvalidInputError(f"{where}: expected {what} within the double range (a ratio of at most ~2^1000 "
                             "between them), got values whose ratio is beyond it; no choice of units holds both")
@@ -123,7 +143,42 @@ def _refuse_ratio(where: str, what: str) -> None:
 
 # --------------------------------------------------------------------------------------------- tops
 
+#: Initial φ, ψ of a heavy top beyond this (rad) are reduced mod 2π exactly before the solve: the closed
+#: form adds φ0 to its phase in double-double, whose 2π carries ~1e-32 relative, so R would err ~|φ0|·1e-16.
+_LARGEST_ANGLE = 4 * math.pi
+
+
+def _reduce_angle(x: float) -> tuple[float, float]:
+    """(x mod 2π in (-π, π], the whole turns taken off as the double nearest x minus it), exactly reduced."""
+    import mpmath
+
+    with mpmath.workprec(max(53, _exponent(x)) + 80):
+        r = mpmath.fmod(mpmath.mpf(x), 2 * mpmath.pi)
+        if r > mpmath.pi:
+            r -= 2 * mpmath.pi
+        elif r <= -mpmath.pi:
+            r += 2 * mpmath.pi
+        return float(r), float(mpmath.mpf(x) - r)
+
+
+def _heavy_angles(scene: Scene, scaled: Scaled) -> Scaled:
+    """``scaled`` with a large initial φ or ψ reduced mod 2π (the motion does not depend on them: both are
+    cyclic (3.63)-(3.64)); the turns taken off are added back to the output columns of φ and ψ."""
+    big = {k: scene.initial[k] for k in ("phi", "psi") if abs(scene.initial[k]) > _LARGEST_ANGLE}
+    if not big:
+        return scaled
+    reduced, offsets = {}, {}
+    for k, x in big.items():
+        reduced[k], offsets[k] = _reduce_angle(x)
+    work = dataclasses.replace(scaled.scene, initial={**scaled.scene.initial, **reduced}, strict=False)
+    return dataclasses.replace(scaled, scene=work, offsets=offsets)
+
+
 def _heavy(scene: Scene) -> Scaled:
+    return _heavy_angles(scene, _heavy_units(scene))
+
+
+def _heavy_units(scene: Scene) -> Scaled:
     p, s = scene.parameters, scene.initial
     I1, I3 = p["I1"], p["I3"]
     gravity = [p["Mgl"], 1.0, 1.0] if "Mgl" in p else [p["M"], p["g"], p["l"]]
@@ -150,10 +205,7 @@ def _heavy(scene: Scene) -> Scaled:
             # but not exactly: say so rather than change the motion
             _refuse_ratio(keys_text("initial", _RATE_KEYS), "theta_dot, phi_dot, psi_dot and √(M g l / I1)")
         rates[r] = v
-    t_end = _exact_ldexp(scene.t_end, j)
-    if t_end is None:
-        raise InvalidInputError(f"scene key [time].t_end: expected t_end·Ω within the double range for this "
-                                f"motion's fastest rate Ω ≈ 2^{j} rad/s, got t_end = {scene.t_end!r}")
+    t_end = _scaled_time(scene.t_end, j)
     params = {"I1": I1s, "I3": I3s, **dict(zip(("M", "g", "l"), g))}
     scaled = dataclasses.replace(scene, parameters=params, initial={**s, **rates}, t_end=t_end, strict=False)
     columns = {**{q: j for q in ("theta_dot", "phi_dot", "psi_dot", "omega1", "omega2", "omega3")},
@@ -176,10 +228,7 @@ def _free(scene: Scene) -> Scaled:
     ws = [_exact_ldexp(x, -j) for x in w]
     if any(x is None for x in ws):
         _refuse_ratio("scene key [initial].omega", "the components of omega")
-    t_end = _exact_ldexp(scene.t_end, j)
-    if t_end is None:
-        raise InvalidInputError(f"scene key [time].t_end: expected t_end·|ω| within the double range, got "
-                                f"t_end = {scene.t_end!r} at |ω| ≈ 2^{j} rad/s")
+    t_end = _scaled_time(scene.t_end, j)
     scaled = dataclasses.replace(scene, parameters=dict(zip(("I1", "I2", "I3"), Is)),
                                  initial={**s, "omega": tuple(ws)}, t_end=t_end, strict=False)
     columns = {**{f"omega{a}": j for a in (1, 2, 3)}, **{f"L{a}": k + j for a in (1, 2, 3)},

@@ -105,10 +105,11 @@ class Case:
     label: str     # the value or the limit case
     scene: dict    # the scene document (before TOML)
     method: str
+    backend: str = "c"  # "c": the compiled DOP853 where a compiler is found; "scipy": MECHDERIVE_NO_C's path
 
     @property
     def name(self) -> str:
-        return f"{self.kind} = {self.label} ({self.method})"
+        return f"{self.kind} = {self.label} ({self.method}{', SciPy' if self.backend == 'scipy' else ''})"
 
 
 def _with(base: dict, table: str | None, key: str, index: int | None, value: Any) -> dict:
@@ -181,8 +182,16 @@ def limit_cases() -> Iterator[Case]:
                        _with(heavy, "initial", "psi_dot", None, psi_dot), method)
 
 
+def scipy_cases() -> Iterator[Case]:
+    """The integrations again on SciPy's DOP853 (the path without a C compiler)."""
+    for case in (*field_cases(), *limit_cases()):
+        if case.method == "integrate" and case.scene["system"] != "falling_cat" and not case.kind.startswith(
+                "heavy_top_mgl"):
+            yield Case(case.kind, case.label, case.scene, case.method, "scipy")
+
+
 def all_cases() -> list[Case]:
-    return list(field_cases()) + list(limit_cases())
+    return list(field_cases()) + list(limit_cases()) + list(scipy_cases())
 
 
 def _toml(scene: dict) -> str:
@@ -259,6 +268,10 @@ def run_case(case: Case, workdir: Path, timeout: float = 30.0) -> dict:
     if pid == 0:  # the child: run, answer through the pipe, never return into the parent's code
         os.close(read)
         try:
+            if case.backend == "scipy":
+                from mechderive.core import cbuild
+
+                cbuild.set_c_enabled(False)
             fd2 = os.open(workdir / "fd2.txt", os.O_WRONLY | os.O_CREAT | os.O_TRUNC)
             os.dup2(fd2, 2)
             status, out, err = run_in_process(argv)
