@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import contextvars
 import functools
+import math
 import time
 from dataclasses import dataclass, field
 from typing import Any, Callable
@@ -253,22 +254,29 @@ def _integrate_to_rtol(run: Callable[[float], Any], estimate: Callable[[Any], fl
 
 
 def _heavy_rate_bound(scene: Scene) -> float:
-    """The fastest rate of a heavy top's motion (rad/s): the largest of the body's |ω| and √(M g l / I1).
+    """The fastest rate of a heavy top's motion (rad/s): of the body's ω, of its nutation, of the pendulum.
 
     ω3 = ψ̇ + φ̇ cos θ is constant (p_ψ = I3 ω3, 3.64); ω1² + ω2² ≤ 2 T / I1 with T ≤ E - V ≤ T0 + 2 M g l
-    (3.65); the pendulum's rate √(M g l / I1) sets the time scale of a top let go from rest.
+    (3.65); the fast nutation turns at a = I3 ω3 / I1 (3.70), which exceeds ω3 where I3 > I1 (a body
+    only with strict = false); the pendulum's rate √(M g l / I1) sets the time scale of a top let go
+    from rest.  Square roots are taken before the quotients, so nothing overflows.
     """
     p, s = _heavy_parameters(scene), scene.initial
     I1, I3, mgl = p["I1"], p["I3"], p["M"] * p["g"] * p["l"]
     th = s["theta"]
-    w3 = s["psi_dot"] + s["phi_dot"] * np.cos(th)
-    transverse = s["theta_dot"] ** 2 + (s["phi_dot"] * np.sin(th)) ** 2  # ω1² + ω2² at t = 0
-    return float(max(np.sqrt(transverse + 4.0 * mgl / I1), abs(w3), np.sqrt(mgl / I1)))
+    w3 = abs(s["psi_dot"] + s["phi_dot"] * math.cos(th))
+    transverse = math.hypot(s["theta_dot"], s["phi_dot"] * math.sin(th))  # √(ω1² + ω2²) at t = 0
+    pendulum = math.sqrt(mgl) / math.sqrt(I1)
+    return max(math.hypot(transverse, 2.0 * pendulum), w3, w3 * (I3 / I1) if w3 else 0.0, pendulum)
 
 
 def _check_integration_length(scene: Scene, rate: float, scaled: Scaled) -> None:
     """Refuse, naming t_end, an integration longer than :data:`MAX_INTEGRATED_RADIANS` of the fastest rate."""
     if rate * scene.t_end > MAX_INTEGRATED_RADIANS:
+        if not math.isfinite(rate):
+            raise InvalidInputError(
+                f"{_OUTPUT_KEYS[scaled.original.system]}: expected a motion whose fastest rate is a double for "
+                f"method 'integrate', got moments and rates whose Euler equations turn it faster than ~1e308 rad/s")
         limit = scaled.seconds(MAX_INTEGRATED_RADIANS / rate)
         raise InvalidInputError(
             f"scene key [time].t_end: expected at most {limit:.6g} s for method 'integrate' "
@@ -458,14 +466,26 @@ def _free_integrated_estimate(traj: Any, need: list[str], rate_unit: float = 1.0
     return float(max(np.max(v) * (rate_unit if k == "omega" else 1.0) for k, v in zip(need, values)))
 
 
+def _free_rate_bound(moments: tuple, w0: np.ndarray) -> float:
+    """The fastest rate of a free top's motion (rad/s): |ω| ≤ √(2T / I_min) times the largest coupling of
+    Euler's equations (3.33), |I_b - I_c| / I_a (at least 1), the rate at which ω's direction changes.
+
+    Square roots and quotients are taken in an order that cannot overflow for any positive moments.
+    """
+    I = [float(x) for x in moments]
+    two_T = math.fsum((math.sqrt(i) * abs(w)) ** 2 for i, w in zip(I, w0))  # Σ I ω², by √I|ω| to stay finite
+    spin = math.sqrt(two_T) / math.sqrt(min(I))
+    coupling = max(1.0, *(abs(I[(a + 1) % 3] - I[(a + 2) % 3]) / I[a] for a in range(3)))
+    return spin * coupling
+
+
 def _free_integrate(scene: Scene, t: np.ndarray) -> tuple[dict, dict, Any]:
     from ..systems.free_top.integrate import integrate_free_top
 
     scaled = _units(scene)
 
     moments, w0, R0 = _free_setup(scene)
-    # |ω|² ≤ 2T / I_min: the body turns no faster
-    _check_integration_length(scene, float(np.sqrt(np.dot(moments, w0**2) / min(moments))), scaled)
+    _check_integration_length(scene, _free_rate_bound(moments, w0), scaled)
     need = _free_needs(scene.quantities)
     rate_unit = 2.0**scaled.rate
     traj, attempts = _integrate_to_rtol(
@@ -643,7 +663,7 @@ def _check_invariants(scaled: Scaled) -> None:
     else:
         return
     for q, v in values.items():
-        if q in wanted and v != 0:
+        if q in wanted and v != 0 and scaled.columns.get(q, 0):
             _refuse_overflow(scaled, q, abs(float(v)), scaled.columns[q])
 
 
@@ -732,6 +752,15 @@ def run_scene(scene: Scene) -> RunResult:
     _check_samples(scene, t)
     method, note = choose_method(scene)
     system = _SYSTEMS[scene.system]
+    if scene.system == "falling_cat":
+        # the cat's parameters are open in the schema: checked here, in the scene's own units (the
+        # bounds in the messages are then the scene's), before they are scaled
+        from ..systems.deformable.cat import check_cat_parameters
+
+        try:
+            check_cat_parameters(scene.parameters or None)
+        except InvalidInputError as exc:
+            raise _name_keys(exc, "parameters", FALLING_CAT_KEYS) from exc
     scaled = scale_scene(scene)
     work = scaled.scene
     t_work = t if scaled.identity else np.linspace(0.0, work.t_end, work.samples)

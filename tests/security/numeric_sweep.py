@@ -176,6 +176,19 @@ def limit_cases() -> Iterator[Case]:
                        dict(heavy, parameters={"I1": 1.0, "I3": 0.5, "Mgl": c * c},
                             initial={**heavy["initial"], "psi_dot": 5.0 * c},
                             time={**heavy["time"], "t_end": heavy["time"]["t_end"] / c}), method)
+    # strict = false: moments no rigid body has, at the extremes (positivity is all that is checked)
+    for base_name, keys in (("free_top", ("I1", "I2", "I3")), ("heavy_top", ("I1", "I3", "M", "l"))):
+        for key in keys:
+            for value in (5e-324, 1e-300, 1e300, 1.7e308):
+                for method in METHODS:
+                    yield Case(f"{base_name} strict = false [parameters].{key}", repr(value),
+                               dict(_with(BASE[base_name], "parameters", key, None, value), strict=False), method)
+    # a tiny spin on the built-in heavy tops' other starts (hanging, looping, horizontal)
+    for theta, phi_dot in ((2.5, 0.0), (0.5, -0.5), (math.pi / 2, 0.0), (3.0, 1.0)):
+        for method in METHODS:
+            yield Case("heavy_top tiny spin", f"theta = {theta!r}, phi_dot = {phi_dot!r}, psi_dot = 1e-300",
+                       _with(_with(_with(heavy, "initial", "theta", None, theta), "initial", "phi_dot", None, phi_dot),
+                             "initial", "psi_dot", None, 1e-300), method)
     for psi_dot in (1e-300, 1e6, 1e100):
         for method in METHODS:
             yield Case("heavy_top spin", f"psi_dot = {psi_dot!r}",
@@ -197,10 +210,13 @@ def all_cases() -> list[Case]:
 def _toml(scene: dict) -> str:
     from mechderive.scenes.schema import _toml_value
 
-    lines = [f"{k} = {_toml_value(v)}" for k, v in scene.items() if not isinstance(v, dict)]
+    def value(v: Any) -> str:
+        return ("true" if v else "false") if isinstance(v, bool) else _toml_value(v)
+
+    lines = [f"{k} = {value(v)}" for k, v in scene.items() if not isinstance(v, dict)]
     for table, content in scene.items():
         if isinstance(content, dict) and content:
-            lines += ["", f"[{table}]"] + [f"{k} = {_toml_value(v)}" for k, v in content.items()]
+            lines += ["", f"[{table}]"] + [f"{k} = {value(v)}" for k, v in content.items()]
     return "\n".join(lines) + "\n"
 
 
@@ -318,6 +334,10 @@ GOOD = ("ok", "refused")
 
 
 def sweep(cases: list[Case], timeout: float = 30.0, verbose: bool = True) -> list[dict]:
+    """Run ``cases`` (each in a forked child of this process, which imports the code under test first)."""
+    import mechderive.cli  # noqa: F401 - loaded before forking: every child runs the same code, warm
+    import mechderive.scenes.planner  # noqa: F401
+
     results = []
     with tempfile.TemporaryDirectory(prefix="mechderive-numeric-sweep-") as tmp:
         for case in cases:
