@@ -30,6 +30,15 @@ report names each scale and its size.
 
 ``strict = false`` scenes run moments no rigid body has; ``waived`` in the report lists
 the conditions that were waived (empty otherwise).
+
+Extreme numbers (issue 12): a scene far from order one is solved in the units of its own motion,
+exact powers of two (:mod:`.units`; the report's ``units`` says so), and what no choice of units
+brings within double precision is refused before solving, naming the scene keys and the range
+allowed — an output beyond the doubles (E = ½ I ω² of 1e600 J), a ``t_end`` beyond a closed form's
+2^51 periods or an integration's :data:`~.units.MAX_INTEGRATED_RADIANS`.  With ``method = "auto"``
+a motion the closed form cannot follow (within ~1e-75 rad of the pole or the bottom, ~1e-150 of the
+separatrix) is integrated, and the note says why; ``method = "exact"`` refuses it, naming the keys.
+A solver's own refusal is prefixed with the scene keys its message mentions.
 """
 
 from __future__ import annotations
@@ -37,6 +46,7 @@ from __future__ import annotations
 import contextvars
 import functools
 import math
+import re
 import time
 from dataclasses import dataclass, field
 from typing import Any, Callable
@@ -49,7 +59,8 @@ from ..core.model import derivation_log, derivation_seconds
 from ..errors import InvalidInputError, MechDeriveError
 from ..systems.heavy_top import parameters as heavy_top_parameters
 from .schema import Scene, waived
-from .units import DOUBLE_MAX, MAX_INTEGRATED_RADIANS, Scaled, keys_text, scale_scene
+from .units import (MAX_INTEGRATED_RADIANS, OUTPUT_KEYS, Scaled, check_invariants, check_samples, in_scene_units,
+                    keys_text, scale_scene)
 
 __all__ = ["RunResult", "run_scene"]
 
@@ -275,7 +286,7 @@ def _check_integration_length(scene: Scene, rate: float, scaled: Scaled) -> None
     if rate * scene.t_end > MAX_INTEGRATED_RADIANS:
         if not math.isfinite(rate):
             raise InvalidInputError(
-                f"{_OUTPUT_KEYS[scaled.original.system]}: expected a motion whose fastest rate is a double for "
+                f"{OUTPUT_KEYS[scaled.original.system]}: expected a motion whose fastest rate is a double for "
                 f"method 'integrate', got moments and rates whose Euler equations turn it faster than ~1e308 rad/s")
         limit = scaled.seconds(MAX_INTEGRATED_RADIANS / rate)
         raise InvalidInputError(
@@ -584,8 +595,6 @@ _SCENE_KEYS = {
 
 
 def _mentioned(message: str, names: tuple[str, ...]) -> list[str]:
-    import re
-
     claim = message.split(";")[0]
     return [k for k in names if re.search(rf"(?<![A-Za-z0-9_]){re.escape(k)}(?![A-Za-z0-9_])", claim)]
 
@@ -613,91 +622,6 @@ def _scene_error(scene: Scene, exc: MechDeriveError) -> MechDeriveError:
     where = ("scene keys " + ", ".join(keys) if len(keys) > 1 else f"scene key {keys[0]}" if keys else
              "scene tables " + ", ".join(f"[{table}]" for table, _ in _SCENE_KEYS[scene.system]))
     return type(exc)(f"{where}: {message}")
-
-
-def _check_samples(scene: Scene, t: np.ndarray) -> None:
-    """Refuse sample times that coincide (a t_end of a few subnormal steps): the outputs are functions of t."""
-    if scene.samples > 1 and not np.all(np.diff(t) > 0):
-        fit = int(scene.t_end / np.spacing(scene.t_end)) + 1
-        raise InvalidInputError(
-            f"scene keys [time].t_end, [time].samples: expected distinct sample times (t_end / (samples - 1) at "
-            f"least the spacing of doubles near t_end, {np.spacing(scene.t_end):.3g} s), got t_end = "
-            f"{scene.t_end!r} with samples = {scene.samples}: at most {fit} samples fit in it")
-
-
-def _refuse_overflow(scaled: Scaled, q: str, big: float, e: int) -> None:
-    """Refuse output ``q`` whose size ``big`` (solver's units) times 2^e leaves the doubles: say how large it is
-    and, where it grows with the rates (as I ω or I ω²), how fast the scene may spin at these moments."""
-    b = int(np.frexp(big)[1]) + e
-    if b <= 1024:
-        return
-    power = 2 if _SCALES_AS[q].startswith("I ω²") else 1
-    fastest = _largest_rate(scaled)
-    rates = "" if q in _CAT_L or fastest == 0 else \
-        f"; at these moments the rates must stay below ~{fastest * 2.0 ** ((1024 - b) / power):.3g} rad/s"
-    raise InvalidInputError(f"{_OUTPUT_KEYS[scaled.original.system]}: expected the output {q} within the double range "
-                            f"(|{q}| ≤ {DOUBLE_MAX:.4g}), got |{q}| ~10^{b * 0.30103:.0f} for these values; {q} scales "
-                            f"as {_SCALES_AS[q]}{rates}")
-
-
-def _largest_rate(scaled: Scaled) -> float:
-    s = scaled.original.initial
-    rates = s.get("omega", ()) if scaled.original.system == "free_top" else [s.get(k, 0.0) for k in _RATE_KEYS]
-    return float(max((abs(r) for r in rates), default=0.0))
-
-
-def _check_invariants(scaled: Scaled) -> None:
-    """Refuse up front a requested conserved quantity (E, p_φ, p_ψ, |L|) that is no double in the scene's units."""
-    if scaled.identity:
-        return
-    work, wanted = scaled.scene, set(scaled.original.quantities)
-    if work.system == "heavy_top":
-        p, s = _heavy_parameters(work), work.initial
-        th, w3 = s["theta"], s["psi_dot"] + s["phi_dot"] * np.cos(s["theta"])
-        E = 0.5 * (p["I1"] * (s["theta_dot"] ** 2 + (s["phi_dot"] * np.sin(th)) ** 2) + p["I3"] * w3 ** 2) \
-            + p["M"] * p["g"] * p["l"] * np.cos(th)
-        values = {"energy": E, "p_psi": p["I3"] * w3, "p_phi": p["I1"] * np.sin(th) ** 2 * s["phi_dot"] + p["I3"] * w3 * np.cos(th)}
-    elif work.system == "free_top":
-        I, w = np.array([work.parameters[k] for k in ("I1", "I2", "I3")]), np.array(work.initial["omega"])
-        values = {"energy": 0.5 * float(np.dot(I, w * w)), "L_norm": float(np.linalg.norm(I * w))}
-    else:
-        return
-    for q, v in values.items():
-        if q in wanted and v != 0 and scaled.columns.get(q, 0):
-            _refuse_overflow(scaled, q, abs(float(v)), scaled.columns[q])
-
-
-def _check_outputs(scaled: Scaled, cols: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
-    """The columns in the scene's units; refused, naming the keys they scale with, where they leave the doubles."""
-    if scaled.identity:
-        return cols
-    out = {}
-    for q, col in cols.items():
-        e = scaled.columns.get(q, 0)
-        if q in scaled.offsets:
-            out[q] = col + scaled.offsets[q]
-            continue
-        if e == 0:
-            out[q] = col
-            continue
-        big = float(np.nanmax(np.abs(np.where(np.isfinite(col), col, 0.0)), initial=0.0))
-        if big > 0:
-            _refuse_overflow(scaled, q, big, e)
-        out[q] = np.ldexp(col, e)
-    return out
-
-
-_CAT_L = ("L1", "L2", "L3")
-_RATE_KEYS = ("theta_dot", "phi_dot", "psi_dot")
-_OUTPUT_KEYS = {"heavy_top": "scene keys [parameters].I1, [parameters].I3, [initial].theta_dot, [initial].phi_dot, "
-                             "[initial].psi_dot",
-                "free_top": "scene keys [parameters].I1, [parameters].I2, [parameters].I3, [initial].omega",
-                "falling_cat": "scene keys [parameters].half_mass, [parameters].joint_offset, [parameters].radius, "
-                               "[parameters].half_length, [time].t_end"}
-_SCALES_AS = {**{q: "the rates" for q in ("theta_dot", "phi_dot", "psi_dot", "omega1", "omega2", "omega3")},
-              "energy": "I ω² (moments times rates squared, and M g l)", "p_phi": "I ω (moments times rates)",
-              "p_psi": "I ω (moments times rates)", "L_norm": "I ω (moments times rates)",
-              **{f"L{a}": "I ω (moments times rates; the cat's: mass · length² / t_end)" for a in (1, 2, 3)}}
 
 
 #: The units of the scene being solved (:mod:`.units`), for the system functions (which take (scene, t)).
@@ -749,7 +673,7 @@ def run_scene(scene: Scene) -> RunResult:
     derived0, compiled0, seconds0 = len(derivation_log()), len(codecache.compile_log()), derivation_seconds()
     built0 = len(cbuild.build_log())
     t = np.linspace(0.0, scene.t_end, scene.samples)
-    _check_samples(scene, t)
+    check_samples(scene, t)
     method, note = choose_method(scene)
     system = _SYSTEMS[scene.system]
     if scene.system == "falling_cat":
@@ -764,7 +688,7 @@ def run_scene(scene: Scene) -> RunResult:
     scaled = scale_scene(scene)
     work = scaled.scene
     t_work = t if scaled.identity else np.linspace(0.0, work.t_end, work.samples)
-    _check_invariants(scaled)
+    check_invariants(scaled)
 
     def compiled_since() -> list[tuple[str, str, float]]:
         # generated Python (lambdify) and generated C (the compiled steppers), each from memory, disk or new
@@ -782,7 +706,7 @@ def run_scene(scene: Scene) -> RunResult:
     solve_derive_s = derivation_seconds() - seconds0
     solve_compile_s = sum(s for _, _, s in compiled_since())
     drifts = system["drift"](work, cols, solution, t_work)
-    cols = _check_outputs(scaled, cols)
+    cols = in_scene_units(scaled, cols)
     if info.get("error_estimate") is not None:
         for q in scaled.offsets:
             if q in cols:

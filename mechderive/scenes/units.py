@@ -23,7 +23,11 @@ is allowed, computed from the constraint itself:
 * a run longer than the method reaches — the closed forms count periods exactly up to 2^51
   (heavy top) or 2^50 (free top) of them, an integration follows at most
   :data:`MAX_INTEGRATED_RADIANS` of the motion's fastest rate;
-* values whose ratio to the others is below what a double can hold at that scale.
+* values whose ratio to the others is below what a double can hold at that scale;
+* sample times that coincide (a ``t_end`` of a few subnormal steps).
+
+:func:`scale_scene` chooses the units, :func:`check_samples` and :func:`check_invariants` refuse before
+the solve, :func:`in_scene_units` converts the columns back (and refuses what overflows).
 """
 
 from __future__ import annotations
@@ -33,10 +37,14 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
+
 from ..errors import InvalidInputError
+from ..systems.heavy_top import parameters as heavy_top_parameters
 from .schema import Scene
 
-__all__ = ["Scaled", "scale_scene", "MAX_INTEGRATED_RADIANS", "DOUBLE_MAX", "keys_text"]
+__all__ = ["Scaled", "scale_scene", "check_samples", "check_invariants", "in_scene_units", "keys_text",
+           "MAX_INTEGRATED_RADIANS", "DOUBLE_MAX", "OUTPUT_KEYS"]
 
 DOUBLE_MAX = 1.7976931348623157e308
 #: Scales within 2^±64 of one are solved as given (no conversion, so ordinary scenes are unchanged).
@@ -264,3 +272,90 @@ def _cat(scene: Scene) -> Scaled:
 def scale_scene(scene: Scene) -> Scaled:
     """The scene in the units of its own motion (see the module docstring); the scene itself when comfortable."""
     return {"heavy_top": _heavy, "free_top": _free, "falling_cat": _cat}[scene.system](scene)
+
+
+# --------------------------------------------------------------------------------------------- reach
+
+def check_samples(scene: Scene, t: np.ndarray) -> None:
+    """Refuse sample times that coincide (a t_end of a few subnormal steps): the outputs are functions of t."""
+    if scene.samples > 1 and not np.all(np.diff(t) > 0):
+        fit = int(scene.t_end / np.spacing(scene.t_end)) + 1
+        raise InvalidInputError(
+            f"scene keys [time].t_end, [time].samples: expected distinct sample times (t_end / (samples - 1) at "
+            f"least the spacing of doubles near t_end, {np.spacing(scene.t_end):.3g} s), got t_end = "
+            f"{scene.t_end!r} with samples = {scene.samples}: at most {fit} samples fit in it")
+
+
+def _refuse_overflow(scaled: Scaled, q: str, big: float, e: int) -> None:
+    """Refuse output ``q`` whose size ``big`` (solver's units) times 2^e leaves the doubles: say how large it is
+    and, where it grows with the rates (as I ω or I ω²), how fast the scene may spin at these moments."""
+    b = int(np.frexp(big)[1]) + e
+    if b <= 1024:
+        return
+    power = 2 if _SCALES_AS[q].startswith("I ω²") else 1
+    fastest = _largest_rate(scaled)
+    rates = "" if q in _CAT_L or fastest == 0 else \
+        f"; at these moments the rates must stay below ~{fastest * 2.0 ** ((1024 - b) / power):.3g} rad/s"
+    raise InvalidInputError(f"{OUTPUT_KEYS[scaled.original.system]}: expected the output {q} within the double range "
+                            f"(|{q}| ≤ {DOUBLE_MAX:.4g}), got |{q}| ~10^{b * 0.30103:.0f} for these values; {q} scales "
+                            f"as {_SCALES_AS[q]}{rates}")
+
+
+def _largest_rate(scaled: Scaled) -> float:
+    s = scaled.original.initial
+    rates = s.get("omega", ()) if scaled.original.system == "free_top" else [s.get(k, 0.0) for k in _RATE_KEYS]
+    return float(max((abs(r) for r in rates), default=0.0))
+
+
+def check_invariants(scaled: Scaled) -> None:
+    """Refuse up front a requested conserved quantity (E, p_φ, p_ψ, |L|) that is no double in the scene's units."""
+    if scaled.identity:
+        return
+    work, wanted = scaled.scene, set(scaled.original.quantities)
+    if work.system == "heavy_top":
+        p, s = heavy_top_parameters.check_params(work.parameters, strict=False), work.initial
+        th, w3 = s["theta"], s["psi_dot"] + s["phi_dot"] * np.cos(s["theta"])
+        E = 0.5 * (p["I1"] * (s["theta_dot"] ** 2 + (s["phi_dot"] * np.sin(th)) ** 2) + p["I3"] * w3 ** 2) \
+            + p["M"] * p["g"] * p["l"] * np.cos(th)
+        values = {"energy": E, "p_psi": p["I3"] * w3,
+                  "p_phi": p["I1"] * np.sin(th) ** 2 * s["phi_dot"] + p["I3"] * w3 * np.cos(th)}
+    elif work.system == "free_top":
+        I, w = np.array([work.parameters[k] for k in ("I1", "I2", "I3")]), np.array(work.initial["omega"])
+        values = {"energy": 0.5 * float(np.dot(I, w * w)), "L_norm": float(np.linalg.norm(I * w))}
+    else:
+        return
+    for q, v in values.items():
+        if q in wanted and v != 0 and scaled.columns.get(q, 0):
+            _refuse_overflow(scaled, q, abs(float(v)), scaled.columns[q])
+
+
+def in_scene_units(scaled: Scaled, cols: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """The columns in the scene's units; refused, naming the keys they scale with, where they leave the doubles."""
+    if scaled.identity:
+        return cols
+    out = {}
+    for q, col in cols.items():
+        e = scaled.columns.get(q, 0)
+        if q in scaled.offsets:
+            out[q] = col + scaled.offsets[q]
+            continue
+        if e == 0:
+            out[q] = col
+            continue
+        big = float(np.nanmax(np.abs(np.where(np.isfinite(col), col, 0.0)), initial=0.0))
+        if big > 0:
+            _refuse_overflow(scaled, q, big, e)
+        out[q] = np.ldexp(col, e)
+    return out
+
+
+_CAT_L = ("L1", "L2", "L3")
+OUTPUT_KEYS = {"heavy_top": "scene keys [parameters].I1, [parameters].I3, [initial].theta_dot, [initial].phi_dot, "
+                             "[initial].psi_dot",
+                "free_top": "scene keys [parameters].I1, [parameters].I2, [parameters].I3, [initial].omega",
+                "falling_cat": "scene keys [parameters].half_mass, [parameters].joint_offset, [parameters].radius, "
+                               "[parameters].half_length, [time].t_end"}
+_SCALES_AS = {**{q: "the rates" for q in ("theta_dot", "phi_dot", "psi_dot", "omega1", "omega2", "omega3")},
+              "energy": "I ω² (moments times rates squared, and M g l)", "p_phi": "I ω (moments times rates)",
+              "p_psi": "I ω (moments times rates)", "L_norm": "I ω (moments times rates)",
+              **{f"L{a}": "I ω (moments times rates; the cat's: mass · length² / t_end)" for a in (1, 2, 3)}}
