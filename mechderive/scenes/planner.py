@@ -75,7 +75,7 @@ class RunResult:
     t: np.ndarray
     columns: dict[str, np.ndarray]
     report: dict[str, Any] = field(default_factory=dict)
-    solution: Any = None  # the solved object, for plots
+    solution: Any = None  # the solved object (in the solver's units where the report has ``units``)
 
 
 def _compiled(name: str, build: Callable[[], tuple], module: str = "numpy") -> Callable[..., list]:

@@ -176,6 +176,11 @@ def limit_cases() -> Iterator[Case]:
                        dict(heavy, parameters={"I1": 1.0, "I3": 0.5, "Mgl": c * c},
                             initial={**heavy["initial"], "psi_dot": 5.0 * c},
                             time={**heavy["time"], "t_end": heavy["time"]["t_end"] / c}), method)
+    # the ends of the allowed rtol, [1e-15, 1e-2]
+    for base_name in ("heavy_top", "free_top", "falling_cat"):
+        for rtol in (1e-15, 1e-2):
+            for method in _methods(BASE[base_name]["system"]):
+                yield Case(f"{base_name} rtol", repr(rtol), dict(BASE[base_name], rtol=rtol), method)
     # strict = false: moments no rigid body has, at the extremes (positivity is all that is checked)
     for base_name, keys in (("free_top", ("I1", "I2", "I3")), ("heavy_top", ("I1", "I3", "M", "l"))):
         for key in keys:
