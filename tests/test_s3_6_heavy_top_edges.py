@@ -256,6 +256,16 @@ def test_leaving_the_pole_along_the_separatrix():
         exact_heavy_top(params, dict(theta=0.0, theta_dot=1e-80, psi_dot=2.0))
 
 
+def test_negligible_gravity_puts_a_root_of_f_beyond_the_doubles():
+    # Regression (issue 12): M g l / I1 = 1e-200 s⁻² against rates of order one (a scene in the units of a
+    # fast motion, θ̇ = 1e300 rad/s in SI) makes β = 2 M g l / I1 = 2e-200, and f(u)'s third root
+    # u3 ≈ α/β ~ 1e200: np.roots of the double coefficients saw a quadratic (LinAlgError, then two roots).
+    # The far root by Newton, the other two from the quotient; the motion against the 30-digit reference.
+    params = dict(TOP, M=1e-201)
+    assert check_motion(params, dict(theta=1.0, phi=0.3, theta_dot=0.4, phi_dot=0.7, psi_dot=3.0), n=5,
+                        ordinary=True) is not None
+
+
 def test_refusals_say_why():
     # θ̇ < 0 on the pole leaves θ's range [0, π]; an apex within 1e-75 rad of the pole (not through it)
     # is beyond double precision's Carlson integrals.  Both: InvalidInputError, "expected …, got …".

@@ -42,7 +42,8 @@ def _triangle_violations(moments: np.ndarray, tol: np.ndarray) -> list[str]:
     names = ("I1", "I2", "I3")
     found = []
     for a, b, c in ((0, 1, 2), (1, 2, 0), (2, 0, 1)):
-        lhs, rhs = moments[..., a] + moments[..., b], moments[..., c]
+        with np.errstate(over="ignore"):  # two moments near the double range's end sum to inf, which is >= any
+            lhs, rhs = moments[..., a] + moments[..., b], moments[..., c]
         bad = lhs < rhs - tol[..., 0]
         if np.any(bad):
             i = np.argwhere(np.atleast_1d(bad))[0]
@@ -95,6 +96,15 @@ def check_principal_moments(I1: Any, I2: Any, I3: Any, *, line_body: bool = Fals
     scale = np.max(np.abs(moments), axis=-1, keepdims=True)
     tol = rtol * scale
     names = ("I1", "I2", "I3")
+    if strict is not False and np.all(moments > 0):
+        # a moment small against the others is only a rounded zero (a line body) where the triangle
+        # inequalities hold; where they fail, that is what is wrong (I1 = 1e308, I2 = 2, I3 = 3 is no
+        # line body: I2 + I3 < I1), and it names all three moments
+        violated = _triangle_violations(moments, tol)
+        if violated:
+            hint = ("; no rigid body has these moments (a flat plate reaches I1 + I2 = I3): " + STRICT_HINT
+                    if strict else "")
+            raise UnphysicalInertiaError(violated[0] + hint)
     for k in range(3):
         mk = moments[..., k]
         negative = mk < -tol[..., 0] if line_body else mk < 0
@@ -103,7 +113,7 @@ def check_principal_moments(I1: Any, I2: Any, I3: Any, *, line_body: bool = Fals
             sign = ">=" if line_body else ">"
             raise UnphysicalInertiaError(f"expected principal moments {sign} 0 (3.22), got {names[k]} = {_g(bad)}"
                                          + kept)
-        if not line_body and np.any(mk <= tol[..., 0]):
+        if not line_body and np.any(mk <= (tol[..., 0] if strict is not False else 0.0)):
             bad = mk[mk <= tol[..., 0]].ravel()[0]
             raise UnphysicalInertiaError(
                 f"expected principal moments > 0 (3.22), got {names[k]} = {_g(bad)}; "

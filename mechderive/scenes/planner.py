@@ -30,11 +30,23 @@ report names each scale and its size.
 
 ``strict = false`` scenes run moments no rigid body has; ``waived`` in the report lists
 the conditions that were waived (empty otherwise).
+
+Extreme numbers (issue 12): a scene far from order one is solved in the units of its own motion,
+exact powers of two (:mod:`.units`; the report's ``units`` says so), and what no choice of units
+brings within double precision is refused before solving, naming the scene keys and the range
+allowed — an output beyond the doubles (E = ½ I ω² of 1e600 J), a ``t_end`` beyond a closed form's
+2^51 periods or an integration's :data:`~.units.MAX_INTEGRATED_RADIANS`.  With ``method = "auto"``
+a motion the closed form cannot follow (within ~1e-75 rad of the pole or the bottom, ~1e-150 of the
+separatrix) is integrated, and the note says why; ``method = "exact"`` refuses it, naming the keys.
+A solver's own refusal is prefixed with the scene keys its message mentions.
 """
 
 from __future__ import annotations
 
+import contextvars
 import functools
+import math
+import re
 import time
 from dataclasses import dataclass, field
 from typing import Any, Callable
@@ -44,9 +56,11 @@ import numpy as np
 from ..core import cbuild, codecache
 from ..core.drift import Drift, drift
 from ..core.model import derivation_log, derivation_seconds
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, MechDeriveError
 from ..systems.heavy_top import parameters as heavy_top_parameters
 from .schema import Scene, waived
+from .units import (MAX_INTEGRATED_RADIANS, OUTPUT_KEYS, Scaled, check_invariants, check_samples, in_scene_units,
+                    keys_text, scale_scene)
 
 __all__ = ["RunResult", "run_scene"]
 
@@ -61,7 +75,7 @@ class RunResult:
     t: np.ndarray
     columns: dict[str, np.ndarray]
     report: dict[str, Any] = field(default_factory=dict)
-    solution: Any = None  # the solved object, for plots
+    solution: Any = None  # the solved object (in the solver's units where the report has ``units``)
 
 
 def _compiled(name: str, build: Callable[[], tuple], module: str = "numpy") -> Callable[..., list]:
@@ -170,27 +184,56 @@ def _heavy_columns(names: tuple[str, ...], values: dict[str, np.ndarray], params
 _POLE_CONDITIONED = ("phi", "psi", "phi_wrapped", "psi_wrapped", "phi_dot", "psi_dot")
 
 
+class _OutOfReach(InvalidInputError):
+    """A closed form cannot follow this motion (it says why); ``method = "auto"`` integrates it instead."""
+
+
+#: The heavy top's estimate names whose values are rates (rad/s): in a scaled scene their estimate scales too.
+_HEAVY_RATE_ESTIMATES = ("theta_dot", "phi_dot", "psi_dot", "u_dot", "omega")
+_HEAVY_STATE_KEYS = ("theta", "theta_dot", "phi_dot", "psi_dot")
+
+
+def _heavy_estimate(top: Any, t: np.ndarray, names: list[str], scaled: Scaled) -> float:
+    """The closed form's estimate over ``names`` in the scene's units (a rate's estimate converted from the solver's)."""
+    if scaled.rate == 0:
+        return float(top.error_estimate(t, names))
+    rates = [k for k in names if k in _HEAVY_RATE_ESTIMATES]
+    others = [k for k in names if k not in _HEAVY_RATE_ESTIMATES]
+    return max(float(top.error_estimate(t, others)) if others else 0.0,
+               float(np.ldexp(top.error_estimate(t, rates), scaled.rate)) if rates else 0.0)
+
+
 def _heavy_exact(scene: Scene, t: np.ndarray) -> tuple[dict, dict, Any]:
     from ..systems.heavy_top.exact import exact_heavy_top
 
-    top = exact_heavy_top(scene.parameters, scene.initial, strict=scene.strict)
+    scaled = _units(scene)
+
+    try:
+        top = exact_heavy_top(scene.parameters, scene.initial, strict=scene.strict)
+    except InvalidInputError as exc:
+        raise _OutOfReach(f"{keys_text('initial', _HEAVY_STATE_KEYS)} (with the parameters): {exc}") from exc
+    if t[-1] > top.t_max:
+        raise InvalidInputError(
+            f"scene key [time].t_end: expected at most {scaled.seconds(top.t_max):.6g} s for this motion in closed "
+            f"form (2^51 nutation periods of {scaled.seconds(top.nutation_period):.6g} s: beyond, the period count "
+            f"is no longer an exact integer in double precision), got {scaled.original.t_end!r}")
     need = _heavy_needs(scene.quantities)
     values, ps = top._evaluate(t, need)
     cols = _heavy_columns(scene.quantities, values, _heavy_parameters(scene))
 
     # measured on this run, at the very values output, from what the quantities need only
     # (HeavyTopSolution.error_estimate: residuals of the derived equations, quadrature of the rates)
-    estimate = float(top.error_estimate(t, need))
+    estimate = _heavy_estimate(top, t, need, scaled)
     info = {"error_estimate": estimate,
             "evaluated": ps.computed, "motion_class": top.motion_class,
-            "nutation_period": top.nutation_period}
+            "nutation_period": scaled.seconds(top.nutation_period)}
     angles = [k for k in need if k in _POLE_CONDITIONED]
     if angles and estimate > scene.rtol:
         # Near the pole (or the bottom) φ and ψ each are ill-conditioned — the motion itself defines
         # them poorly there, and the estimate counts it; R, the apex and ω, built from the
         # well-conditioned half sums and differences, may still meet rtol: say so if they do.
         rest = [k for k in need if k not in _POLE_CONDITIONED] or ["R"]
-        if top.error_estimate(t, rest) <= scene.rtol:
+        if _heavy_estimate(top, t, rest, scaled) <= scene.rtol:
             info["error_estimate_kind"] = "near-pole conditioning of φ, ψ"
     return cols, info, top
 
@@ -221,20 +264,65 @@ def _integrate_to_rtol(run: Callable[[float], Any], estimate: Callable[[Any], fl
         tol = max(tol * 0.5 * rtol / est, SCIPY_MIN_RTOL)
 
 
+def _heavy_rate_bound(scene: Scene) -> float:
+    """The fastest rate of a heavy top's motion (rad/s): of the body's ω, of its nutation, of the pendulum.
+
+    ω3 = ψ̇ + φ̇ cos θ is constant (p_ψ = I3 ω3, 3.64); ω1² + ω2² ≤ 2 T / I1 with T ≤ E - V ≤ T0 + 2 M g l
+    (3.65); the fast nutation turns at a = I3 ω3 / I1 (3.70), which exceeds ω3 where I3 > I1 (a body
+    only with strict = false); the pendulum's rate √(M g l / I1) sets the time scale of a top let go
+    from rest.  Square roots are taken before the quotients, so nothing overflows.
+    """
+    p, s = _heavy_parameters(scene), scene.initial
+    I1, I3, mgl = p["I1"], p["I3"], p["M"] * p["g"] * p["l"]
+    th = s["theta"]
+    w3 = abs(s["psi_dot"] + s["phi_dot"] * math.cos(th))
+    transverse = math.hypot(s["theta_dot"], s["phi_dot"] * math.sin(th))  # √(ω1² + ω2²) at t = 0
+    pendulum = math.sqrt(mgl) / math.sqrt(I1)
+    return max(math.hypot(transverse, 2.0 * pendulum), w3, w3 * (I3 / I1) if w3 else 0.0, pendulum)
+
+
+def _check_integration_length(scene: Scene, rate: float, scaled: Scaled) -> None:
+    """Refuse, naming t_end, an integration longer than :data:`MAX_INTEGRATED_RADIANS` of the fastest rate."""
+    if rate * scene.t_end > MAX_INTEGRATED_RADIANS:
+        if not math.isfinite(rate):
+            raise InvalidInputError(
+                f"{OUTPUT_KEYS[scaled.original.system]}: expected a motion whose fastest rate is a double for "
+                f"method 'integrate', got moments and rates whose Euler equations turn it faster than ~1e308 rad/s")
+        limit = scaled.seconds(MAX_INTEGRATED_RADIANS / rate)
+        raise InvalidInputError(
+            f"scene key [time].t_end: expected at most {limit:.6g} s for method 'integrate' "
+            f"({MAX_INTEGRATED_RADIANS:.6g} rad at this motion's fastest rate, "
+            f"{float(np.ldexp(rate, scaled.rate)):.6g} rad/s: a longer run takes more than ~10^7 steps), "
+            f"got {scaled.original.t_end!r}")
+
+
 def _heavy_integrate(scene: Scene, t: np.ndarray) -> tuple[dict, dict, Any]:
     from ..kinematics.rotations import euler_rates
     from ..systems.heavy_top.integrate import integrate_heavy_top
 
+    scaled = _units(scene)
+
+    _check_integration_length(scene, _heavy_rate_bound(scene), scaled)
+    rate_unit = 2.0**scaled.rate
+
+    def estimate(tr: Any) -> float | None:
+        # ω in rad/s of the scene, R and the angles in rad (HeavyTopTrajectory.angle_error_estimate's parts)
+        parts = (tr.omega_error_estimate, tr.rotation_error_estimate, tr.euler_angle_error_estimate)
+        if any(x is None for x in parts):
+            return None
+        return float(max(parts[0] * rate_unit, parts[1], parts[2]))
+
     traj, attempts = _integrate_to_rtol(
         lambda tol: integrate_heavy_top(scene.parameters, scene.initial, t, method="DOP853", rtol=tol,
                                         atol=tol * 1e-3, strict=scene.strict),
-        lambda tr: tr.angle_error_estimate, scene.rtol)
+        estimate, scene.rtol)
     phi, theta, psi = traj.euler_angles.T
     values: dict[str, np.ndarray] = {"phi": phi, "theta": theta, "psi": psi, "u": np.cos(theta), "R": traj.R,
                                      "omega": traj.omega, "apex": traj.R[:, 2, :]}
     need = _heavy_needs(scene.quantities)
     if any(k in need for k in ("theta_dot", "phi_dot", "psi_dot")):
-        rates = euler_rates(theta, psi, *traj.omega.T)  # singular where sin θ = 0: inf/nan reported there
+        with np.errstate(divide="ignore", invalid="ignore"):
+            rates = euler_rates(theta, psi, *traj.omega.T)  # singular where sin θ = 0: inf/nan reported there
         values.update(phi_dot=rates[:, 0], theta_dot=rates[:, 1], psi_dot=rates[:, 2])
     # E, p_φ, p_ψ from ω and R (the integrator's own invariants), not through the Euler rates,
     # which are singular at θ = 0.
@@ -245,8 +333,8 @@ def _heavy_integrate(scene: Scene, t: np.ndarray) -> tuple[dict, dict, Any]:
         if name in scene.quantities:
             cols[name] = inv[:, k]
     cols = {q: cols[q] for q in scene.quantities}
-    est = traj.angle_error_estimate
-    info = {"error_estimate": None if est is None else float(est),
+    est = estimate(traj)
+    info = {"error_estimate": est,
             "error_estimate_kind": traj.error_estimate_kind,
             "integrator": f"DOP853 ({'compiled C' if traj.backend == 'c' else 'SciPy solve_ivp'})",
             "integrator_attempts": attempts,
@@ -335,16 +423,38 @@ def _free_needs(names: tuple[str, ...]) -> list[str]:
 
 
 def _free_exact(scene: Scene, t: np.ndarray) -> tuple[dict, dict, Any]:
-    from ..systems.free_top.exact import exact_free_top
+    from ..systems.free_top.exact import MAX_TRACKING_POINTS, TRACKING_STEP, exact_free_top
+
+    scaled = _units(scene)
 
     moments, w0, R0 = _free_setup(scene)
-    sol = exact_free_top(moments, w0, R0=R0, strict=scene.strict)
+    try:
+        sol = exact_free_top(moments, w0, R0=R0, strict=scene.strict)
+    except InvalidInputError as exc:
+        raise _OutOfReach(f"scene keys [parameters], [initial].omega: {exc}") from exc
+    if t[-1] > sol.t_max:
+        raise InvalidInputError(
+            f"scene key [time].t_end: expected at most {scaled.seconds(sol.t_max):.6g} s for this motion in closed "
+            f"form (2^50 quarter periods or turns: beyond, the count is no longer an exact integer in double "
+            f"precision), got {scaled.original.t_end!r}")
+    need = _free_needs(scene.quantities)
+    if "euler_angles" in need:
+        # the continuous Euler angles are tracked on a grid of TRACKING_STEP rad of the fastest turn
+        fastest = float(np.sqrt(2.0 * sol.energy / min(moments)))
+        points = t[-1] * fastest / TRACKING_STEP + len(t)
+        if points > MAX_TRACKING_POINTS:
+            limit = (MAX_TRACKING_POINTS - len(t)) * TRACKING_STEP / fastest
+            raise InvalidInputError(
+                f"scene key [time].t_end: expected at most {scaled.seconds(max(limit, 0.0)):.6g} s for continuous "
+                f"Euler angles (phi, theta, psi) of this motion ({MAX_TRACKING_POINTS} tracking points of "
+                f"{TRACKING_STEP} rad), got {scaled.original.t_end!r}; R or the quaternion need no tracking")
     cols = _free_columns(scene.quantities, lambda: sol.omega(t), lambda: sol.rotation(t),
                          lambda: sol.euler_angles(t), lambda: sol.quaternion(t), moments)
     # measured on this run, at the very values output (FreeTopSolution.error_estimate): ω relative to
-    # |ω|, R and q in their entries, the Euler angles in rad
-    estimate = float(sol.error_estimate(t, sorted({_FREE_EXACT_ESTIMATES[k] for k in _free_needs(scene.quantities)})))
-    info = {"error_estimate": estimate, "kind": sol.kind, "polhode_period": sol.polhode_period, "m": sol.m}
+    # |ω|, R and q in their entries, the Euler angles in rad — none of them depends on the units
+    estimate = float(sol.error_estimate(t, sorted({_FREE_EXACT_ESTIMATES[k] for k in need})))
+    info = {"error_estimate": estimate, "kind": sol.kind, "polhode_period": scaled.seconds(sol.polhode_period),
+            "m": sol.m}
     return cols, info, sol
 
 
@@ -355,8 +465,8 @@ _FREE_ESTIMATES = {"omega": "omega_error_estimate", "rotation": "rotation_error_
                    "quaternion": "rotation_error_estimate", "euler_angles": "euler_angle_error_estimate"}
 
 
-def _free_integrated_estimate(traj: Any, need: list[str]) -> float | None:
-    """The largest of the run's measured estimates over the families the scene outputs.
+def _free_integrated_estimate(traj: Any, need: list[str], rate_unit: float = 1.0) -> float | None:
+    """The largest of the run's measured estimates over the families the scene outputs (ω's in the scene's rad/s).
 
     A scene of ω columns alone is not charged with the Euler angles' 2π per unresolved pole
     passage; one that outputs angles is.
@@ -364,23 +474,40 @@ def _free_integrated_estimate(traj: Any, need: list[str]) -> float | None:
     values = [getattr(traj, _FREE_ESTIMATES[k]) for k in need]
     if any(v is None for v in values):
         return None
-    return float(max(np.max(v) for v in values))
+    return float(max(np.max(v) * (rate_unit if k == "omega" else 1.0) for k, v in zip(need, values)))
+
+
+def _free_rate_bound(moments: tuple, w0: np.ndarray) -> float:
+    """The fastest rate of a free top's motion (rad/s): |ω| ≤ √(2T / I_min) times the largest coupling of
+    Euler's equations (3.33), |I_b - I_c| / I_a (at least 1), the rate at which ω's direction changes.
+
+    Square roots and quotients are taken in an order that cannot overflow for any positive moments.
+    """
+    I = [float(x) for x in moments]
+    two_T = math.fsum((math.sqrt(i) * abs(w)) ** 2 for i, w in zip(I, w0))  # Σ I ω², by √I|ω| to stay finite
+    spin = math.sqrt(two_T) / math.sqrt(min(I))
+    coupling = max(1.0, *(abs(I[(a + 1) % 3] - I[(a + 2) % 3]) / I[a] for a in range(3)))
+    return spin * coupling
 
 
 def _free_integrate(scene: Scene, t: np.ndarray) -> tuple[dict, dict, Any]:
     from ..systems.free_top.integrate import integrate_free_top
 
+    scaled = _units(scene)
+
     moments, w0, R0 = _free_setup(scene)
+    _check_integration_length(scene, _free_rate_bound(moments, w0), scaled)
     need = _free_needs(scene.quantities)
+    rate_unit = 2.0**scaled.rate
     traj, attempts = _integrate_to_rtol(
         lambda tol: integrate_free_top(moments, w0, t, R0=R0, method="DOP853", rtol=tol, atol=tol * 1e-3,
                                        strict=scene.strict),
-        lambda tr: _free_integrated_estimate(tr, need), scene.rtol)
+        lambda tr: _free_integrated_estimate(tr, need, rate_unit), scene.rtol)
     # The Euler angles are counted along the integrator's own steps (never unwrapped from the
     # samples, which aliases at coarse sampling).
     cols = _free_columns(scene.quantities, lambda: traj.omega, lambda: traj.R, lambda: traj.euler_angles,
                          lambda: traj.quaternion, moments)
-    info = {"error_estimate": _free_integrated_estimate(traj, need),
+    info = {"error_estimate": _free_integrated_estimate(traj, need, rate_unit),
             "integrator": f"DOP853 ({'compiled C' if traj.backend == 'c' else 'SciPy solve_ivp'})",
             "integrator_attempts": attempts,
             "rhs_evaluations": int(traj.n_evaluations)}
@@ -403,7 +530,12 @@ def _free_drift(scene: Scene, cols: dict, solution: Any, t: np.ndarray) -> dict[
 def _cat_integrate(scene: Scene, t: np.ndarray) -> tuple[dict, dict, Any]:
     from ..systems.deformable.cat import cat_columns, falling_cat
 
-    cat = falling_cat(scene.parameters or None, duration=scene.t_end, samples=scene.samples, rtol=scene.rtol)
+    scaled = _units(scene)
+
+    try:
+        cat = falling_cat(scene.parameters or None, duration=scene.t_end, samples=scene.samples, rtol=scene.rtol)
+    except InvalidInputError as exc:
+        raise _name_keys(exc, "parameters", tuple(FALLING_CAT_KEYS)) from exc
     data = cat_columns(cat)
     cols = {q: np.asarray(data[q]) for q in scene.quantities}
     L = np.stack([data["L1"], data["L2"], data["L3"]], axis=-1)
@@ -411,7 +543,8 @@ def _cat_integrate(scene: Scene, t: np.ndarray) -> tuple[dict, dict, Any]:
             "error_estimate_kind": "distance of R to a rerun at a 10× tighter tolerance (rad)",
             "integrator": {"c": "DOP853 (compiled C)", "magnus": "Magnus (order 4, adaptive)"}.get(cat.backend,
                                                                                                  cat.backend),
-            "peak_bend": cat.peak_bend, "max_abs_L": float(np.max(np.abs(L)))}
+            "peak_bend": cat.peak_bend,
+            "max_abs_L": float(np.ldexp(np.max(np.abs(L)), scaled.columns.get("L1", 0)))}
     return cols, info, cat
 
 
@@ -450,25 +583,136 @@ def choose_method(scene: Scene) -> tuple[str, str | None]:
     return method, None
 
 
+#: The falling cat's [parameters] names (its messages name them bare).
+FALLING_CAT_KEYS = ("half_mass", "joint_offset", "radius", "half_length", "peak_bend")
+#: The keys a message of each system's solvers may name, per table.
+_SCENE_KEYS = {
+    "heavy_top": (("parameters", ("I1", "I3", "M", "g", "l", "Mgl")),
+                  ("initial", ("theta", "phi", "psi", "theta_dot", "phi_dot", "psi_dot"))),
+    "free_top": (("parameters", ("I1", "I2", "I3")), ("initial", ("omega", "phi", "theta", "psi"))),
+    "falling_cat": (("parameters", FALLING_CAT_KEYS),),
+}
+
+
+def _mentioned(message: str, names: tuple[str, ...]) -> list[str]:
+    claim = message.split(";")[0]
+    return [k for k in names if re.search(rf"(?<![A-Za-z0-9_]){re.escape(k)}(?![A-Za-z0-9_])", claim)]
+
+
+def _name_keys(exc: MechDeriveError, table: str, names: tuple[str, ...]) -> MechDeriveError:
+    """``exc`` re-worded to start with the scene keys of ``table`` that it is about (the table if none)."""
+    message = str(exc)
+    if message.startswith("scene "):
+        return exc
+    found = _mentioned(message, names)
+    where = keys_text(table, found) if found else f"scene table [{table}]"
+    return type(exc)(f"{where}: {message}")
+
+
+def _scene_error(scene: Scene, exc: MechDeriveError) -> MechDeriveError:
+    """A solver's refusal as a scene's: naming the keys its message mentions, else the tables it is about.
+
+    The planner checks what it can before solving and names the keys itself; this is for what
+    only a solver can find (it says what and why; the scene's keys are named in front).
+    """
+    message = str(exc)
+    if message.startswith("scene "):
+        return exc
+    keys = [f"[{table}].{k}" for table, names in _SCENE_KEYS[scene.system] for k in _mentioned(message, names)]
+    where = ("scene keys " + ", ".join(keys) if len(keys) > 1 else f"scene key {keys[0]}" if keys else
+             "scene tables " + ", ".join(f"[{table}]" for table, _ in _SCENE_KEYS[scene.system]))
+    return type(exc)(f"{where}: {message}")
+
+
+#: The units of the scene being solved (:mod:`.units`), for the system functions (which take (scene, t)).
+_UNITS: contextvars.ContextVar[Scaled | None] = contextvars.ContextVar("mechderive_scene_units", default=None)
+
+
+def _units(scene: Scene) -> Scaled:
+    """The units ``scene`` is being solved in: those :func:`run_scene` chose, or the scene's own."""
+    scaled = _UNITS.get()
+    return scaled if scaled is not None and scaled.scene is scene else Scaled(scene, scene)
+
+
+def _with_units(scaled: Scaled, solve: Callable, scene: Scene, t: np.ndarray) -> tuple:
+    token = _UNITS.set(scaled)
+    try:
+        return solve(scene, t)
+    finally:
+        _UNITS.reset(token)
+
+
+def _solve(scene: Scene, method: str, scaled: Scaled, t: np.ndarray) -> tuple[str, str | None, tuple]:
+    """(method used, note, (columns, info, solution)) in the solver's units; ``auto`` integrates where the
+    closed form cannot follow the motion, and says so."""
+    system = _SYSTEMS[scene.system]
+    work = scaled.scene
+    try:
+        return method, None, _with_units(scaled, system[method], work, t)
+    except _OutOfReach as exc:
+        if scene.method != "auto":
+            raise InvalidInputError(str(exc)) from exc
+        try:
+            result = _with_units(scaled, system["integrate"], work, t)
+        except MechDeriveError as second:
+            raise type(second)(f"{_scene_error(work, second)} (and the closed form cannot follow this motion "
+                               f"either: {exc.__cause__})") from second
+        return "integrate", f"integrated: the closed form cannot follow this motion ({exc.__cause__})", result
+
+
 def run_scene(scene: Scene) -> RunResult:
-    """Solve ``scene``: derive, compile and evaluate only what its quantities need."""
+    """Solve ``scene``: derive, compile and evaluate only what its quantities need.
+
+    A scene whose numbers are far from order one is solved in the units of its own motion and
+    converted back exactly (:mod:`.units`); what cannot be computed in double precision is refused
+    with the scene keys it depends on and the range allowed.  With ``method = "auto"`` a motion the
+    closed form cannot follow (within ~1e-75 rad of the pole, ~1e-150 of the separatrix) is
+    integrated instead, and the report's note says so.
+    """
     start = time.perf_counter()
     derived0, compiled0, seconds0 = len(derivation_log()), len(codecache.compile_log()), derivation_seconds()
     built0 = len(cbuild.build_log())
     t = np.linspace(0.0, scene.t_end, scene.samples)
+    check_samples(scene, t)
     method, note = choose_method(scene)
     system = _SYSTEMS[scene.system]
+    if scene.system == "falling_cat":
+        # the cat's parameters are open in the schema: checked here, in the scene's own units (the
+        # bounds in the messages are then the scene's), before they are scaled
+        from ..systems.deformable.cat import check_cat_parameters
+
+        try:
+            check_cat_parameters(scene.parameters or None)
+        except InvalidInputError as exc:
+            raise _name_keys(exc, "parameters", FALLING_CAT_KEYS) from exc
+    scaled = scale_scene(scene)
+    work = scaled.scene
+    t_work = t if scaled.identity else np.linspace(0.0, work.t_end, work.samples)
+    check_invariants(scaled)
+
     def compiled_since() -> list[tuple[str, str, float]]:
         # generated Python (lambdify) and generated C (the compiled steppers), each from memory, disk or new
         return codecache.compile_log()[compiled0:] + [(f"{name} (C)", "compiled" if how == "built" else how, s)
                                                       for name, how, s in cbuild.build_log()[built0:]]
 
-    cols, info, solution = system[method](scene, t)
+    try:
+        method, fallback, (cols, info, solution) = _solve(scene, method, scaled, t_work)
+    except MechDeriveError as exc:
+        raise _scene_error(scene, exc) from exc
+    if fallback:
+        note = fallback
     solve_end = time.perf_counter()
     # what the solve stage itself derived and compiled (the drift check may derive more afterwards)
     solve_derive_s = derivation_seconds() - seconds0
     solve_compile_s = sum(s for _, _, s in compiled_since())
-    drifts = system["drift"](scene, cols, solution, t)
+    drifts = system["drift"](work, cols, solution, t_work)
+    cols = in_scene_units(scaled, cols)
+    if info.get("error_estimate") is not None:
+        for q in scaled.offsets:
+            if q in cols:
+                # the turns added back: the rounding of φ0 itself and of each output, a few ulp of the larger
+                info["error_estimate"] = max(info["error_estimate"], 4 * float(np.spacing(max(
+                    float(np.max(np.abs(cols[q]))), abs(scaled.original.initial[q])))))
     derived = derivation_log()[derived0:]
     compiled = compiled_since()
     derive_s = derivation_seconds() - seconds0
@@ -517,6 +761,17 @@ def run_scene(scene: Scene) -> RunResult:
         "waived": let_through,
         "details": info,
     }
+    if not scaled.identity:
+        report["units"] = _units_note(scaled)
     if rtol_reason is not None:
         report["rtol_met_reason"] = rtol_reason
     return RunResult(scene=scene, t=t, columns=cols, report=report, solution=solution)
+
+
+def _units_note(scaled: Scaled) -> str:
+    """What the report's ``units`` says: the scene was solved in units of its own motion (powers of two)."""
+    if scaled.original.system == "falling_cat":
+        return (f"solved with masses, lengths and time in units of the scene's own (exact powers of two; "
+                f"t = t'·2^{-scaled.time}); outputs converted back")
+    return (f"solved in units where the moments and the fastest rate are of order one (exact powers of two: "
+            f"rates ×2^{-scaled.rate}, t ×2^{scaled.time}); outputs converted back")

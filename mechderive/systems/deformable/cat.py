@@ -179,7 +179,27 @@ def check_cat_parameters(parameters: Mapping[str, Any] | None) -> dict[str, floa
     if "peak_bend" in out and not out["peak_bend"] < np.pi:
         raise InvalidInputError(f"expected `peak_bend` in (0, π) (the halves must not fold through each other), "
                                 f"got {out['peak_bend']!r}")
+    _check_invertible(out)
     return out
+
+
+def _check_invertible(p: Mapping[str, float]) -> None:
+    """Refuse a body whose inertia Ĩ (3.87) is singular in double precision at the straight shape.
+
+    There the axial moment is (4/3) m ρ² (the rings) and the transverse one (2/3) m (ρ² + ℓ² + 3 d²)
+    (d the joint offset): Ω (3.92) needs Ĩ⁻¹, so their ratio (ρ² + ℓ² + 3 d²) / (2 ρ²) must stay below
+    1/ε = 2^52.  Formed from the lengths' ratios to the largest, so no square under- or overflows.
+    """
+    rho, ell, d = p["radius"], p["half_length"], p["joint_offset"]
+    big = max(rho, ell, d)
+    r, l_, d_ = rho / big, ell / big, d / big
+    ratio = (r * r + l_ * l_ + 3 * d_ * d_) / (2 * r * r) if r * r > 0 else float("inf")
+    if not ratio <= 2.0**52:
+        least = big * float(np.sqrt((l_ * l_ + 3 * d_ * d_) / (2.0**53 - 1)))
+        raise InvalidInputError(
+            f"expected `radius` >= {least:.6g} (the body's inertia (3.87) invertible in double precision: the "
+            f"transverse/axial moment ratio (radius² + half_length² + 3 joint_offset²)/(2 radius²) <= 2^52), got "
+            f"radius = {rho!r} with half_length = {ell!r}, joint_offset = {d!r}")
 
 
 def cat_connection(parameters: Mapping[str, Any] | None = None) -> ShapeConnection:
@@ -234,13 +254,18 @@ def _resolve_backend(backend: str) -> tuple[str, Any]:
 
 
 def _polar(R: np.ndarray) -> np.ndarray:
-    """One Newton step of the polar decomposition, R(3 − RᵀR)/2: orthogonal to O(|RᵀR − 1|²).
+    """Newton steps of the polar decomposition, R(3 − RᵀR)/2, each orthogonal to O(|RᵀR − 1|²), until R is.
 
-    DOP853 keeps RᵀR = 1 only to its tolerance (~1e-13); the step makes each R a rotation to rounding
-    and moves it by no more than that deviation (smoothly in t).
+    DOP853 keeps RᵀR = 1 only to its tolerance (~1e-13 at the default rtol, ~1e-4 at the loosest a
+    scene allows, 1e-2); the steps make each R a rotation to rounding (one step from 1e-13, three from
+    1e-4) and move it by no more than that deviation (smoothly in t).
     """
-    RtR = np.einsum("...ba,...bc->...ac", R, R)
-    return 0.5 * np.einsum("...ab,...bc->...ac", R, 3 * np.eye(3) - RtR)
+    for _ in range(8):
+        RtR = np.einsum("...ba,...bc->...ac", R, R)
+        R = 0.5 * np.einsum("...ab,...bc->...ac", R, 3 * np.eye(3) - RtR)
+        if not np.max(np.abs(RtR - np.eye(3)), initial=0.0) > 1e-8:  # the step just taken squared it to rounding
+            return R
+    return R
 
 
 def _dop853_rtol(rtol: float) -> float:
@@ -358,8 +383,17 @@ def _flip_bend(values: tuple[float, ...], rtol: float, backend: str) -> float:
         if s0 * s1 <= 0 and c0 < 0 and c1 < 0:
             return float(_brent(lambda b: _half_turn_residual(values, b, rtol, backend, stepper)[0], b0, b1,
                                 xtol=1e-15, rtol=1e-15))
-    raise InvalidInputError(f"expected a body that can turn over with a bend below {grid[-1]:.2f} rad, "
-                            f"got {dict(zip(BODY_PARAMETERS, values))} (halves too slender to flip in one sweep)")
+    # the turn at the largest bend: short of π, the body is too stout for any bend in the grid; past it,
+    # it turned over at a bend below the grid's first (too slender for the search)
+    short = signs[-1][0] > 0
+    p = dict(zip(BODY_PARAMETERS, values))
+    raise InvalidInputError(
+        f"expected a body whose halves turn it over with a peak bend between {grid[0]:.2f} and {grid[-1]:.2f} rad "
+        f"(the default cat, radius/half_length = {DEFAULTS['radius'] / DEFAULTS['half_length']:.3g}, needs 1.82), "
+        f"got `radius`/`half_length` = {p['radius'] / p['half_length']:.3g} (`joint_offset`/`half_length` = "
+        f"{p['joint_offset'] / p['half_length']:.3g}): "
+        + ("too stout, a bend of 3.00 rad turns it by less than π" if short else
+           "too slender, it turns by π at a bend below 0.20 rad"))
 
 
 @dataclass(frozen=True)

@@ -208,6 +208,15 @@ class FreeTopSolution:
         return np.eye(3) if self.kind == "steady" else self._orient.S
 
     @property
+    def t_max(self) -> float:
+        """The largest |t| (s) evaluated: 2^50 quarter periods or turns of this motion (inf at rest).
+
+        Beyond it the count of quarter periods (or of turns, reduced mod 2π) is no longer an exact
+        integer in double precision; later times are refused.
+        """
+        return self._t_max
+
+    @property
     def precession_per_period(self) -> float:
         """φ' advance per polhode period (rad); nan on the separatrix or for a steady rotation."""
         if self.kind != "elliptic":
@@ -434,15 +443,21 @@ class FreeTopSolution:
             flips = np.cumsum(np.r_[0, np.sum(q[1:] * q[:-1], axis=-1) < 0]) % 2  # q and -q: one rotation
             q = np.where(flips[:, None] == 1, -q, q)
             q[0] = q0 if np.dot(q0, q[0]) >= 0 else -q0
-            w = self._omega_values(side * grid)
-            states = np.concatenate([w * inertia, q], axis=-1)
+            # samples closer than MIN_TRACKED_TURN of rotation to the last tracked point are not tracked
+            # through: R's rounding would be all their difference (a run of 1e-300 s), and the tracker
+            # would refine noise.  Their half-angle arguments continue the tracked one's, nearest branch.
+            kept = _tracked_points(grid, w_max)
+            w = self._omega_values(side * grid[kept])
+            states = np.concatenate([w * inertia, q[kept]], axis=-1)
             tracker = SampleTracker(states[0], inertia, args0 if np.dot(q0, q[0]) > 0 else (args0[0] + np.pi,
                                                                                              args0[1] + np.pi))
-            args = np.empty((len(grid), 2))
-            args[0] = tracker.args_at(states[0])
-            for a in range(0, len(grid) - 1, _TRACKING_CHUNK):
-                b = min(a + _TRACKING_CHUNK, len(grid) - 1)
-                args[a:b + 1] = tracker.feed(states[a:b + 1], side * np.diff(grid[a:b + 1]))
+            tracked = np.empty((len(states), 2))
+            tracked[0] = tracker.args_at(states[0])
+            times = grid[kept]
+            for a in range(0, len(states) - 1, _TRACKING_CHUNK):
+                b = min(a + _TRACKING_CHUNK, len(states) - 1)
+                tracked[a:b + 1] = tracker.feed(states[a:b + 1], side * np.diff(times[a:b + 1]))
+            args = _continued_arguments(q, kept, tracked)
             angles = euler_angles_from_half_angles(q, args)
             out[sel] = angles[np.searchsorted(grid, side * flat[sel])]
             near = tracker.near.copy() if near is None else near + tracker.near
@@ -596,6 +611,36 @@ def _setup(I: np.ndarray, w0: np.ndarray, R0: np.ndarray) -> FreeTopSolution:
         _tiny=bool(e.K is not None and e.m1 < setup.TINY_M1), _L_unit=L_unit, _ab_unit=ab_unit,
         _amp_scaled=amp_scaled, _t_max=_t_max(nu),
         _mp=dict(constants=e, L=L_norm), **common)
+
+
+#: Samples whose rotation from the last tracked point is below this (rad) continue its half-angle
+#: arguments instead of being tracked through (see :meth:`FreeTopSolution._tracked_euler_angles`).
+MIN_TRACKED_TURN = 2.0**-20
+
+
+def _tracked_points(grid: np.ndarray, w_max: float) -> np.ndarray:
+    """Indices into the increasing ``grid`` to track through: the first point of each span of
+    :data:`MIN_TRACKED_TURN`/w_max (the first point always)."""
+    if w_max <= 0 or len(grid) < 2:
+        return np.arange(len(grid))
+    cell = np.floor(grid * (w_max / MIN_TRACKED_TURN))
+    return np.flatnonzero(np.r_[True, cell[1:] != cell[:-1]])
+
+
+def _continued_arguments(q: np.ndarray, kept: np.ndarray, tracked: np.ndarray) -> np.ndarray:
+    """The half-angle arguments (σ, δ) at every point: tracked at ``kept``, elsewhere the argument of
+    q's pair (q0, q3) and (q1, q2) on the branch nearest the last tracked one (held where the pair is 0)."""
+    if len(kept) == len(q):
+        return tracked
+    last = np.searchsorted(kept, np.arange(len(q)), side="right") - 1
+    ref = tracked[last]
+    out = np.empty_like(ref)
+    for p, (i, j) in enumerate(((0, 3), (1, 2))):
+        raw = np.arctan2(q[:, j], q[:, i])
+        zero = (q[:, i] == 0) & (q[:, j] == 0)
+        out[:, p] = np.where(zero, ref[:, p], raw + 2 * np.pi * np.round((ref[:, p] - raw) / (2 * np.pi)))
+    out[kept] = tracked
+    return out
 
 
 def _t_max(rate) -> float:

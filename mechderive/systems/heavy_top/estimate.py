@@ -325,7 +325,8 @@ class _Estimator:
             diff = (diff + np.pi) % (2 * np.pi) - np.pi
         # rounding of both sides: the values, the quadrature sums
         x, y = ps.one_minus_plus_u()
-        noise = 4 * np.spacing(np.abs(values[picks]) + abs(start)) + 4 * _EPS * (size + size0[0])
+        # (8 ulp of the larger rather than 4 of the sum: the sum overflows for angles near the double range)
+        noise = 8 * np.spacing(np.maximum(np.abs(values[picks]), abs(start))) + 4 * _EPS * (size + size0[0])
         worst = float(np.max(np.abs(diff) + noise)) if len(picks) else 0.0
         # A shift of the time the phase stands for moves the angle by rate × shift, and the
         # quadrature (along the same phase) cannot see it: the shift the nutation checks measured

@@ -52,6 +52,7 @@ the pole (θ0 = 0) only φ + ψ and φ̇ + ψ̇ are defined; φ̇(0), ψ̇(0) ar
 from __future__ import annotations
 
 import functools
+import math
 from dataclasses import dataclass, field
 from typing import Any, Mapping
 
@@ -539,6 +540,18 @@ class HeavyTopSolution:
     _theta_const: float
     _mp: dict = field(default_factory=dict, repr=False)  # 40-digit setup values for the lazy angle constants
 
+    @property
+    def t_max(self) -> float:
+        """The largest t (s) evaluated: |κt + v0| ≤ 2^52·K(m), 2^51 nutation periods (inf when steady).
+
+        Beyond it adjacent doubles of the phase are more than a quarter period apart and the period
+        count is no longer an exact integer; later times are refused (by the Jacobi functions).
+        """
+        if self._period is None:
+            return float("inf")
+        K = self._period.hi / 2
+        return float((2.0**52 * K - abs(self._v0.hi)) / math.ldexp(self._kappa.hi, self._kappa.exp))
+
     @functools.cached_property
     def _phase0(self) -> tuple[float, float, float]:
         """(j0, r0_hi, r0_lo): the reduced phase at t = 0, by the arithmetic every time goes through."""
@@ -876,14 +889,27 @@ def _real_roots(coeffs: list, known: mpmath.mpf | None = None) -> list:
         # f(u) = (u - u0)(c3 u² + b2 u + b1): synthetic division
         b2 = c2 + c3 * known
         b1 = c1 + b2 * known
-        disc = b2 * b2 - 4 * c3 * b1
-        if disc < 0 and disc > -mpmath.mpf(10) ** (-mpmath.mp.dps + 5) * (b2 * b2 + abs(4 * c3 * b1)):
-            disc = mpmath.mpf(0)  # a double root, up to the 40-digit rounding
-        if disc >= 0:
-            sq = mpmath.sqrt(disc)
-            q = -(b2 + (sq if b2 >= 0 else -sq)) / 2  # no cancellation (Numerical Recipes 5.6)
-            others = [q / c3, b1 / q] if q != 0 else [mpmath.mpf(0), mpmath.mpf(0)]
+        others = _quadratic_roots(c3, b2, b1)
+        if others is not None:
             return sorted([known, *others])
+    biggest = max(abs(c) for c in coeffs)
+    if known is None and abs(c3) < mpmath.mpf(2) ** -600 * biggest:
+        # β = 2 M g l / I1 negligible against the rates (a scene solved in units of a fast motion): one
+        # root far out at ~ -c2/c3 (≈ α/β, beyond every double), the other two O(1).  Newton's method
+        # finds the far one; dividing it out from the constant term down, q0 = -c0/u3, q1 = (q0 - c1)/u3,
+        # q2 = (q1 - c2)/u3, leaves their quadratic without cancellation.
+        far = -c2 / c3
+        for _ in range(100):
+            step = (((c3 * far + c2) * far + c1) * far + c0) / ((3 * c3 * far + 2 * c2) * far + c1)
+            far -= step
+            if abs(step) <= mpmath.mpf(10) ** (-mpmath.mp.dps + 2) * abs(far):
+                break
+        q0 = -c0 / far
+        q1 = (q0 - c1) / far
+        others = _quadratic_roots((q1 - c2) / far, q1, q0)
+        if others is None:
+            raise DerivationError(f"expected three real roots of f(u), got a complex pair beside u = {far}")
+        return sorted([far, *others])
     import numpy as np
 
     approx = np.roots([float(c) for c in coeffs])
@@ -907,6 +933,21 @@ def _real_roots(coeffs: list, known: mpmath.mpf | None = None) -> list:
     if len(real) != 3:
         raise DerivationError(f"expected three real roots of f(u), got {roots}")
     return real
+
+
+def _quadratic_roots(a, b, c) -> list | None:
+    """The real roots of a u² + b u + c (mpmath, no cancellation: Numerical Recipes 5.6); None if complex.
+
+    A discriminant negative by the working precision's rounding only is a double root.
+    """
+    disc = b * b - 4 * a * c
+    if disc < 0 and disc > -mpmath.mpf(10) ** (-mpmath.mp.dps + 5) * (b * b + abs(4 * a * c)):
+        disc = mpmath.mpf(0)  # a double root, up to the 40-digit rounding
+    if disc < 0:
+        return None
+    sq = mpmath.sqrt(disc)
+    q = -(b + (sq if b >= 0 else -sq)) / 2
+    return [q / a, c / q] if q != 0 else [mpmath.mpf(0), mpmath.mpf(0)]
 
 
 #: Below this 1 - u2 (or 1 + u1) the 40-digit roots would leave fewer than 30 of its digits.
@@ -1009,7 +1050,7 @@ def _setup(params: dict, init: dict) -> HeavyTopSolution:
         raise InvalidInputError(
             f"expected the motion at least 1e-150 from the separatrix (1 - m >= 1e-150: the nutation period "
             f"~ln(1/(1 - m)) and the Jacobi functions take 1 - m as a double), got 1 - m = {mpmath.nstr(m1, 3)}: "
-            f"integrate_heavy_top follows such a motion")
+            f"integrating it (integrate_heavy_top; a scene's method 'integrate') follows such a motion")
     kappa = mpmath.sqrt(kappa2)
     s0 = min(max((u0 - u_1) / amp, mp(0)), mp(1))
     u_dot0 = -mpmath.sin(th0) * S[1]
@@ -1058,7 +1099,8 @@ def _refuse_too_close(gap, where: str) -> None:
             f"expected the apex to stay at least ~1e-75 rad from the {where} unless it passes through it exactly "
             f"(1 ∓ cos θ ≥ 1e-150: below, Carlson's integrals of the passage under- or overflow in double "
             f"precision), got a motion coming within {mpmath.nstr(mpmath.sqrt(2 * gap), 3)} rad of it: use theta = "
-            f"{'0' if where == 'pole' else 'pi'} for the {where} itself, or integrate_heavy_top")
+            f"{'0' if where == 'pole' else 'pi'} for the {where} itself, or integrate the motion (integrate_heavy_top; "
+            f"a scene's method 'integrate')")
 
 
 def _passage_sign(value, slope, theta_dot) -> float:
