@@ -67,6 +67,9 @@ import datetime
 import math
 import os
 import re
+import secrets
+import stat
+import sys
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
@@ -79,6 +82,7 @@ from ..systems.heavy_top import parameters as heavy_top_parameters
 
 __all__ = [
     "Scene",
+    "SizeEstimate",
     "SYSTEMS",
     "METHODS",
     "QUANTITIES",
@@ -100,6 +104,20 @@ RTOL_RANGE = (1e-15, 1e-2)
 MAX_SAMPLES = 10**7
 MAX_NAME_LENGTH = 100
 MAX_SCENE_BYTES = 1_000_000  # a scene is a page of text; refuse anything far larger unread
+
+#: The largest run a scene may ask for (bytes): its estimated peak memory, and its table written as CSV,
+#: must each stay within it (:attr:`Scene.size_estimate`), so that a scene cannot exhaust a shared machine.
+MAX_RUN_BYTES = 1_000_000_000
+#: Peak memory of each system's solve per sample beyond the table (bytes), an upper bound of the growth of
+#: the process's maxrss measured from 4·10⁴ (falling_cat) or 5·10⁵ samples, closed form and integration,
+#: one quantity and all: heavy_top 360-510, free_top 225-490, falling_cat 11,250 (its L is taken by
+#: differences over a 9-point stencil of rotations per sample).
+_SOLVE_BYTES_PER_SAMPLE = {"free_top": 600, "heavy_top": 600, "falling_cat": 12_000}
+#: Memory per value of the table (bytes): the float64 column, the columns the quantities are taken from and
+#: the CSV writer's rows (measured 11-25 per column and sample on top of the solve).
+_BYTES_PER_VALUE = 40
+#: The CSV file per value (bytes): ``repr`` of a double has at most 24 characters, plus the separator.
+_CSV_BYTES_PER_VALUE = 25
 
 TOP_LEVEL_KEYS = ("name", "system", "method", "rtol", "strict")
 DEFAULT_STRICT = True
@@ -142,13 +160,51 @@ _SCENE_STRICT_HINT = "add strict = false to the scene to accept moments no rigid
 _NAME_PATTERN = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")  # a bare TOML key and a Python identifier
 
 
+# ----------------------------------------------------------------------------- numbers
+
+#: The largest finite double, as messages state the range of every number a scene holds.
+_LARGEST = sys.float_info.max
+
+
+class _Unrepresentable:
+    """A number the scene's text spells but no double holds: ``1e400``, an integer of 401 digits.
+
+    Made by the TOML reader (:func:`_parse_toml`) in place of ``inf`` or an exception, so that the
+    check of the key it is found under refuses it by name.
+    """
+
+    def __init__(self, text: str) -> None:
+        self.text = text
+
+    def __repr__(self) -> str:
+        return self.text
+
+
+class _Underflowed(float):
+    """A nonzero float literal that is 0 in double precision (``1e-400``); it is 0 wherever 0 is allowed."""
+
+    text: str
+
+    def __repr__(self) -> str:
+        return f"{self.text} (0 in double precision)"
+
+
+def _digits(n: int) -> int:
+    """The number of decimal digits of ``n``, without converting it to text (huge ints refuse that)."""
+    n = abs(n)
+    d = max(1, int(n.bit_length() * 0.30102999566398120))  # log10(2): exact or one short
+    return d + (n >= 10 ** d)
+
+
 # ----------------------------------------------------------------------------- messages
 
-def _show(value: Any) -> str:
-    """The value as the message shows it: short, escaped, with its TOML kind when that helps."""
+def _show(value: Any, depth: int = 0) -> str:
+    """The value as the message shows it: short, escaped, on one line, with its TOML kind when that helps."""
     if isinstance(value, bool):
         return f"{str(value).lower()} (a boolean)"
-    if isinstance(value, (int, float)):
+    if isinstance(value, (int, np.integer)) and _digits(int(value)) > 40:
+        return f"an integer of {_digits(int(value))} digits"
+    if isinstance(value, (int, float, _Unrepresentable)):
         return repr(value)
     if isinstance(value, str):
         text = repr(value)
@@ -158,7 +214,9 @@ def _show(value: Any) -> str:
     if isinstance(value, (datetime.date, datetime.time)):
         return f"{value.isoformat()} (a date/time)"
     if isinstance(value, (list, tuple)):
-        text = repr(list(value))
+        if depth > 2 or len(value) > 20:
+            return f"a list of {len(value)} items"
+        text = "[" + ", ".join(_show(v, depth + 1) for v in value) + "]"
         return text if len(text) <= 80 else f"a list of {len(value)} items"
     return f"a {type(value).__name__}"
 
@@ -186,10 +244,20 @@ def _one_of(names: Iterable[str]) -> str:
 
 def _number(where: str, value: Any, *, expected: str = "a finite number",
             valid: Callable[[float], bool] = lambda x: True) -> float:
-    """``value`` as a float; bool and non-numbers are refused, ints accepted, NaN/inf refused."""
+    """``value`` as a float; bool and non-numbers are refused, ints accepted, NaN/inf refused.
+
+    Every number of a scene is a finite double: a value spelled beyond ±1.8e308 (``1e400``, an
+    integer of 400 digits) is refused as not finite, naming the key, rather than read as inf.
+    """
+    finite = f"{expected} (a finite double: at most {_LARGEST:.2g} in size)"
+    if isinstance(value, _Unrepresentable):
+        _fail(where, finite, value, NonFiniteValueError)
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
         _fail(where, expected, value)
-    x = float(value)
+    try:
+        x = float(value)
+    except OverflowError:  # an int beyond the largest double
+        _fail(where, finite, value, NonFiniteValueError)
     if not math.isfinite(x):
         _fail(where, expected, x, NonFiniteValueError)
     if not valid(x):
@@ -339,6 +407,54 @@ def _name(value: Any) -> str | None:
     return value
 
 
+# ----------------------------------------------------------------------------- the size of a run
+
+def _gigabytes(n: float) -> str:
+    return f"{n / 1e9:.3g} GB" if n >= 1e8 else f"{n / 1e6:.3g} MB"
+
+
+@dataclass(frozen=True)
+class SizeEstimate:
+    """What a scene's run will take, estimated from its system, samples and quantities before solving.
+
+    ``columns`` counts ``t`` and the quantities; ``values = samples × columns``.  ``table_bytes``
+    is the table in memory (float64; an ``.npz`` file's size), ``csv_bytes`` an upper bound of the
+    ``.csv`` file, ``memory_bytes`` of the run's peak memory: the solve's working memory per sample
+    (measured per system) and the table's.  :data:`MAX_RUN_BYTES` bounds the last two.
+    """
+
+    samples: int
+    columns: int
+    values: int
+    table_bytes: int
+    csv_bytes: int
+    memory_bytes: int
+
+    @classmethod
+    def of(cls, system: str, samples: int, quantities: int) -> "SizeEstimate":
+        columns = quantities + 1
+        values = samples * columns
+        return cls(samples, columns, values, 8 * values, _CSV_BYTES_PER_VALUE * values,
+                   samples * _SOLVE_BYTES_PER_SAMPLE[system] + _BYTES_PER_VALUE * values)
+
+    @property
+    def max_samples(self) -> int:
+        """The most samples these columns may have within :data:`MAX_RUN_BYTES`."""
+        per_sample = max(self.memory_bytes, self.csv_bytes) // self.samples
+        return MAX_RUN_BYTES // per_sample
+
+
+def _check_size(scene: "Scene") -> None:
+    size = scene.size_estimate
+    if max(size.memory_bytes, size.csv_bytes) <= MAX_RUN_BYTES:
+        return
+    raise InvalidInputError(
+        f"scene key [time].samples: expected a run of at most {_gigabytes(MAX_RUN_BYTES)}, got an estimated "
+        f"{_gigabytes(size.memory_bytes)} of memory ({_gigabytes(size.csv_bytes)} as CSV) for {size.samples} samples "
+        f"of {size.columns} columns (t and {size.columns - 1} quantities); use at most {size.max_samples} "
+        "samples, or fewer [output].quantities")
+
+
 # ----------------------------------------------------------------------------- the scene
 
 @dataclass(frozen=True)
@@ -382,6 +498,12 @@ class Scene:
             _fail("[time].samples", f"an integer in [2, {MAX_SAMPLES}]", self.samples)
         set_(self, "samples", int(self.samples))
         set_(self, "quantities", _quantities(system, self.quantities))
+        _check_size(self)
+
+    @property
+    def size_estimate(self) -> SizeEstimate:
+        """The run's size, estimated before solving (:class:`SizeEstimate`); at most :data:`MAX_RUN_BYTES`."""
+        return SizeEstimate.of(self.system, self.samples, len(self.quantities))
 
     def times(self) -> np.ndarray:
         """The sample times: ``samples`` equally spaced on [0, t_end], both ends included."""
@@ -434,12 +556,137 @@ method, rtol, strict and tables [parameters], [initial], [time], [output]
                  strict=mapping.get("strict", DEFAULT_STRICT))
 
 
+# ----------------------------------------------------------------------------- reading
+
+_FILE_KINDS = ((stat.S_ISDIR, "a directory"), (stat.S_ISFIFO, "a FIFO (named pipe)"),
+               (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
+               (stat.S_ISSOCK, "a socket"))
+# O_NONBLOCK: opening a FIFO that appeared after the check must not wait for a writer.
+_OPEN_FLAGS = (os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_NOCTTY", 0)
+               | getattr(os, "O_CLOEXEC", 0) | getattr(os, "O_BINARY", 0))
+
+
+def _not_regular(source: str, mode: int) -> InvalidInputError:
+    kind = next((name for is_kind, name in _FILE_KINDS if is_kind(mode)), "not a regular file")
+    return InvalidInputError(f"scene {source}: expected a regular file, got {kind}")
+
+
+def _os_error(source: str, exc: OSError | ValueError) -> InvalidInputError:
+    if isinstance(exc, FileNotFoundError):
+        return InvalidInputError(f"scene {source}: expected an existing file, got no such file")
+    reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+    return InvalidInputError(f"scene {source}: cannot read it: {reason}")
+
+
+def _read_file(path: Path, source: str) -> str:
+    """The text of the scene file ``path``: a regular file of at most :data:`MAX_SCENE_BYTES` bytes of UTF-8.
+
+    A FIFO, a device (``/dev/zero``), a directory or a socket — directly or through a link — is
+    refused before it is read, and checked again on the descriptor opened (it may have been
+    replaced in between); at most ``MAX_SCENE_BYTES + 1`` bytes are ever read, whatever the size
+    the file claims.  A leading UTF-8 byte-order mark is dropped.
+    """
+    try:
+        mode = os.stat(path).st_mode
+    except (OSError, ValueError) as exc:  # ValueError: a NUL in the name
+        raise _os_error(source, exc) from None
+    if not stat.S_ISREG(mode):
+        raise _not_regular(source, mode)
+    try:
+        fd = os.open(path, _OPEN_FLAGS)
+    except OSError as exc:
+        raise _os_error(source, exc) from None
+    try:
+        info = os.fstat(fd)
+        if not stat.S_ISREG(info.st_mode):
+            raise _not_regular(source, info.st_mode)
+        chunks, size = [], 0
+        while size <= MAX_SCENE_BYTES and (chunk := os.read(fd, MAX_SCENE_BYTES + 1 - size)):
+            chunks.append(chunk)
+            size += len(chunk)
+    except OSError as exc:
+        raise _os_error(source, exc) from None
+    finally:
+        os.close(fd)
+    if size > MAX_SCENE_BYTES:
+        raise InvalidInputError(f"scene {source}: expected at most {MAX_SCENE_BYTES} bytes, got "
+                                + (f"{info.st_size}" if info.st_size > MAX_SCENE_BYTES else "more"))
+    data = b"".join(chunks).removeprefix(b"\xef\xbb\xbf")
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = data.count(b"\n", 0, exc.start) + 1
+        column = exc.start - (data.rfind(b"\n", 0, exc.start) + 1) + 1
+        raise InvalidInputError(f"scene {source}: expected UTF-8 text, got byte 0x{data[exc.start]:02x}, "
+                                f"which is not UTF-8, at line {line}, column {column}") from None
+
+
+# A decimal integer as TOML spells it, standing alone (not in a float, a date or a bare key's digits).
+_INTEGER = re.compile(r"(?<![\w.+-])[+-]?[0-9](?:_?[0-9])*(?![\w.:+-])")
+
+
+def _parse_float(text: str) -> Any:
+    """TOML's floats as doubles; one spelled beyond the largest double, or nonzero and below the
+    smallest, is kept with its text (:class:`_Unrepresentable`, :class:`_Underflowed`) for the message."""
+    x = float(text)
+    if math.isinf(x) and "inf" not in text:
+        return _Unrepresentable(text)
+    if x == 0.0 and re.search(r"[1-9]", text.split("e")[0].split("E")[0]):
+        zero = _Underflowed(x)
+        zero.text = text
+        return zero
+    return x
+
+
+def _parse_toml(text: str, source: str) -> dict[str, Any]:
+    """``tomllib.loads`` with every failure an :class:`InvalidInputError` saying where it is.
+
+    Python refuses to convert an integer of more than ``sys.get_int_max_str_digits()`` (4300)
+    digits to an int; those (which no double holds either) are read as :class:`_Unrepresentable`
+    so that the check of their key refuses them by name.
+    """
+    try:
+        try:
+            return tomllib.loads(text, parse_float=_parse_float)
+        except tomllib.TOMLDecodeError:
+            raise
+        except ValueError:
+            limit = sys.get_int_max_str_digits()
+            nonce = "".join(secrets.choice("0123456789") for _ in range(18))
+            huge: dict[str, str] = {}
+
+            def mark(match: re.Match) -> str:
+                digits = len(match.group().lstrip("+-").replace("_", ""))
+                if not limit or digits <= limit:
+                    return match.group()
+                marker = f"0.{nonce}{len(huge)}"
+                huge[marker] = f"an integer of {digits} digits"
+                return marker
+
+            marked = _INTEGER.sub(mark, text)
+            return tomllib.loads(marked, parse_float=lambda t: _Unrepresentable(huge[t]) if t in huge
+                                 else _parse_float(t))
+    except tomllib.TOMLDecodeError as exc:
+        where = re.search(r"at line (\d+)", str(exc))
+        lines = text.splitlines()
+        shown = ""
+        if where and 1 <= int(where.group(1)) <= len(lines):
+            shown = f": {_show(lines[int(where.group(1)) - 1].strip())}"
+        raise InvalidInputError(f"scene {source}: not valid TOML: {exc}{shown}") from None
+    except RecursionError:
+        raise InvalidInputError(f"scene {source}: not valid TOML: arrays or tables nested too deeply") from None
+    except ValueError as exc:
+        raise InvalidInputError(f"scene {source}: not valid TOML: {str(exc).splitlines()[0]}") from None
+
+
 def load_scene(path_or_text: os.PathLike | str, *, name: str | None = None) -> Scene:
     """Read a scene from a file (a :class:`pathlib.Path`) or from TOML text (a ``str``).
 
-    A file's scene is named after the file's stem unless it has a ``name`` key or
-    ``name`` is given.  TOML syntax errors become
-    :class:`~mechderive.errors.InvalidInputError` with the line and column.
+    A file's scene is named after the file's stem (if that is a valid name) unless it has a
+    ``name`` key or ``name`` is given.  The file must be a regular file (not a FIFO, a device or a
+    directory) of at most :data:`MAX_SCENE_BYTES` bytes of UTF-8 text.  TOML syntax errors, files
+    that cannot be read and numbers no double holds become
+    :class:`~mechderive.errors.InvalidInputError` naming the file, the line or the key.
 
     >>> load_scene('system = "heavy_top"\\nsamples = 5')
     Traceback (most recent call last):
@@ -451,14 +698,9 @@ method, rtol, strict and tables [parameters], [initial], [time], [output]
     if isinstance(path_or_text, os.PathLike):
         path = Path(path_or_text)
         source = f"file {str(path)!r}"
-        try:
-            if path.stat().st_size > MAX_SCENE_BYTES:
-                raise InvalidInputError(f"scene {source}: expected at most {MAX_SCENE_BYTES} bytes, "
-                                        f"got {path.stat().st_size}")
-            text = path.read_text(encoding="utf-8")
-        except (OSError, UnicodeDecodeError) as exc:
-            raise InvalidInputError(f"scene {source}: cannot read it: {exc}") from exc
-        default_name = path.stem
+        text = _read_file(path, source)
+        stem = path.stem
+        default_name = stem if 1 <= len(stem) <= MAX_NAME_LENGTH and stem.isprintable() else None
     elif isinstance(path_or_text, str):
         text, source = path_or_text, "text"
         if "\n" not in text and "=" not in text and text.strip().endswith(".toml"):
@@ -468,12 +710,7 @@ method, rtol, strict and tables [parameters], [initial], [time], [output]
             raise InvalidInputError(f"scene text: expected at most {MAX_SCENE_BYTES} characters, got {len(text)}")
     else:
         raise InvalidInputError(f"scene: expected a pathlib.Path or TOML text (a str), got {_show(path_or_text)}")
-    try:
-        document = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise InvalidInputError(f"scene {source}: not valid TOML: {exc}") from exc
-    except RecursionError as exc:
-        raise InvalidInputError(f"scene {source}: not valid TOML: arrays or tables nested too deeply") from exc
+    document = _parse_toml(text, source)
     if name is None and "name" not in document:
         name = default_name
     return parse_scene(document, name=name)
