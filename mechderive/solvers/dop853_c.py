@@ -40,7 +40,7 @@ import numpy as np
 
 from ..errors import IntegrationError
 from ..core import cbuild
-from .half_angles import DECADE_THRESHOLDS, DECADES
+from .half_angles import DECADE_THRESHOLDS, DECADES, MAX_REFINEMENTS
 from .limits import check_max_steps, nonfinite_start, nonfinite_state, too_many_steps
 
 __all__ = ["CompiledDOP853", "compiled_dop853", "dop853_c_source", "unavailable_error", "MIN_RTOL", "CHUNK_SECONDS",
@@ -128,6 +128,7 @@ typedef struct {
     double speed[2];       /* bound of |dz/dt| on the current step */
     double near[2][NDEC];  /* entries of the path below |z| = 10^-k */
     int depth[2];          /* the path is below 10^-k for k < depth (thresholds decrease) */
+    long refinements;      /* halvings left in this step */
 } Track;
 
 /* a piece staying at |z| >= rho (0: unresolved, as if through z = 0) */
@@ -231,6 +232,7 @@ static void track_piece(Track *tr, Step *st, double xa, double za[2][2], double 
 {
     double rho[2] = {0.0, 0.0};
     int ok[2] = {1, 1}, touch[2] = {0, 0};   /* touch: 1 leaving z = 0, 2 arriving, 3 at 0 throughout */
+    int halving_helps = 1;                   /* not with an infinite or NaN length: half of it is as long */
     for (int p = 0; p < 2; p++) {
         /* |q| ~ 1: no overflow; a |z| below 1e-154 squares to 0 and counts as z = 0 */
         double ra2 = za[p][0] * za[p][0] + za[p][1] * za[p][1];
@@ -240,12 +242,14 @@ static void track_piece(Track *tr, Step *st, double xa, double za[2][2], double 
             ok[p] = touch[p] == 3;
         } else {
             double length = tr->speed[p] * st->h * (xb - xa);
+            if (!isfinite(length)) halving_helps = 0;
             rho[p] = 0.5 * (sqrt(ra2) + sqrt(rb2) - length);
             /* the path stays at |z| >= rho, so turns by <= length/rho < pi: the chord's turn */
             ok[p] = rho[p] > 0.0 && length < 0.5 * TWO_PI * rho[p];
         }
     }
-    if (!(ok[0] && ok[1]) && depth < TRACK_DEPTH) {
+    if (!(ok[0] && ok[1]) && depth < TRACK_DEPTH && halving_helps && tr->refinements > 0) {
+        tr->refinements--;
         double xm = 0.5 * (xa + xb), ym[NDIM], zm[2][2];
         dense_eval(st, xm, ym);
         track_pairs(tr, ym, zm);
@@ -386,6 +390,7 @@ int dop853_solve(Run *run, const double *par, const double *y0, int n_out, const
                 for (int s = 0; s <= NST; s++) v2 = fmax(v2, K[s][i] * K[s][i] + K[s][j] * K[s][j]);
                 tr.speed[p] = SPEED_MARGIN * sqrt(v2);
             }
+            tr.refinements = TRACK_REFINEMENTS;
             track_pairs(&tr, y, za);
         }
         while (k < n_out && t_out[k] <= t_new) {
@@ -464,6 +469,7 @@ def dop853_c_source(exprs: Any, state: Sequence[Any], params: Sequence[Any], *, 
         f"/* {name}: DOP853 on a right-hand side derived by mechderive (generated; safe to delete). */",
         "#include <math.h>",
         f"#define NDIM {n}",
+        f"#define TRACK_REFINEMENTS {MAX_REFINEMENTS}L  /* half_angles.MAX_REFINEMENTS: halvings per step */",
         # SciPy's tableau, printed exactly (repr round-trips); prefixed so no derived name can clash
         _c_array("DOP_A", coef.A), _c_array("DOP_B", coef.B), _c_array("DOP_E3", coef.E3),
         _c_array("DOP_E5", coef.E5), _c_array("DOP_D", coef.D), _c_array("TRACK_DECADE", DECADE_THRESHOLDS),

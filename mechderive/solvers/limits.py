@@ -26,13 +26,14 @@ import numpy as np
 from ..errors import IntegrationError, InvalidInputError
 
 __all__ = ["MAX_STEPS", "check_max_steps", "too_many_steps", "check_fixed_steps", "nonfinite_state",
-           "nonfinite_start", "first_nonfinite_row"]
+           "nonfinite_start", "first_nonfinite_row", "check_outputs"]
 
-#: The default limit of steps of one integration: 10⁸ steps take ~1–3 min compiled (heavy top,
-#: 1 µs a step with the half-angle tracking) and hours through SciPy, far beyond any scene of the
-#: package (the longest, 10⁴ nutation periods, takes ~3·10⁵); more means a motion too fast or too
-#: long for the tolerance, which is better said than run for hours.
-MAX_STEPS = 10**8
+#: The default limit of steps of one integration: 10⁷ steps take ~10–30 s compiled (heavy top, ~1–2 µs
+#: a step with the half-angle tracking; up to a few minutes where the tracking must refine every step)
+#: and ~20 min through SciPy; the longest runs of the package and its tests take ≤ 2·10⁶ (a 10⁶-step
+#: splitting and its Richardson rerun; 10⁴ nutation periods at rtol 1e-14: ~1.5·10⁶).  More means a
+#: motion too fast or too long for the tolerance, better said in seconds than run for an hour.
+MAX_STEPS = 10**7
 
 
 def check_max_steps(max_steps: Any) -> int:
@@ -81,3 +82,13 @@ def first_nonfinite_row(rows: np.ndarray) -> int | None:
     bad = ~np.isfinite(rows).all(axis=tuple(range(1, rows.ndim)))
     return int(np.argmax(bad)) if bad.any() else None
 
+
+
+def check_outputs(method: str, outputs: dict[str, Any]) -> None:
+    """Raise :class:`IntegrationError` naming the first of ``outputs`` (name → array, number or None)
+    holding a NaN or an infinity — e.g. an energy that overflows while the state is still finite."""
+    for name, value in outputs.items():
+        if value is not None and not np.all(np.isfinite(np.asarray(value, dtype=float))):
+            raise IntegrationError(f"expected every output of {method} to be finite, got NaN or infinity in `{name}`: "
+                                   "a parameter or initial value is probably out of floating-point range (squares "
+                                   "of ω or L overflow beyond ~1e154)")

@@ -64,7 +64,8 @@ from ...errors import IntegrationError, InvalidInputError, ShapeError  # noqa: F
 from ...kinematics.conversions import matrix_to_quaternion, quaternion_to_matrix
 from ...solvers import lie_poisson
 from ...solvers.dop853 import check_backend, run_dop853
-from ...solvers.limits import MAX_STEPS, check_fixed_steps, check_max_steps, first_nonfinite_row, nonfinite_state
+from ...solvers.limits import (MAX_STEPS, check_fixed_steps, check_max_steps, check_outputs, first_nonfinite_row,
+                               nonfinite_state)
 from ...solvers.composition import suzuki_fractal, yoshida6
 from ...solvers.half_angles import (euler_angles_from_half_angles, follow_fixed_steps, initial_half_angles,
                                     output_error_estimates)
@@ -373,7 +374,7 @@ def integrate_free_top(I: Sequence[float], omega0: Sequence[float], t_eval: Sequ
         atol = 1e-12 if atol is None else check_positive(atol, "atol")
         if torque is not None and not callable(torque):
             raise InvalidInputError(f"expected `torque` to be callable τ(t, omega, R), got {torque!r}")
-        return _run_dop853(inertia, w0, q0, t, rtol, atol, torque, estimate_error, backend, max_steps)
+        return _checked(_run_dop853, inertia, w0, q0, t, rtol, atol, torque, estimate_error, backend, max_steps)
     if backend != "auto":
         raise InvalidInputError(f"expected `backend` only with method='DOP853', got backend={backend!r} "
                                 "with method='splitting'")
@@ -388,7 +389,7 @@ def integrate_free_top(I: Sequence[float], omega0: Sequence[float], t_eval: Sequ
         raise InvalidInputError("expected a step size `step` > 0 with method='splitting', got step=None")
     step = check_positive(step, "step")
     order = _check_order(4 if order is None else order)
-    return _run_splitting(inertia, w0, q0, t, step, order, estimate_error, max_steps)
+    return _checked(_run_splitting, inertia, w0, q0, t, step, order, estimate_error, max_steps)
 
 
 def integrate_free_top_ensemble(I: Any, omega0: Any, t_eval: Sequence[float], *, step: float, order: int = 4,
@@ -440,15 +441,32 @@ def integrate_free_top_ensemble(I: Any, omega0: Any, t_eval: Sequence[float], *,
             omegas.append((L / np.reshape(I_cols, (3, -1))).T.copy())
             quats.append(q.T.copy())
     wall = time.perf_counter() - start
-    omega = np.stack(omegas)
-    quat, norm_drift = _project(np.stack(quats))
-    e_drift, l_drift = _drifts(omega, inertia)
+    with np.errstate(all="ignore"):
+        omega = np.stack(omegas)
+        quat, norm_drift = _project(np.stack(quats))
+        e_drift, l_drift = _drifts(omega, inertia)
+    check_outputs("the Lie–Poisson splitting", dict(omega=omega, quaternion=quat, energy_drift=e_drift,
+                                                    angular_momentum_drift=l_drift))
     return FreeTopEnsemble(t=t, omega=omega, quaternion=quat, order=order, energy_drift=e_drift,
                            angular_momentum_drift=l_drift, quaternion_norm_drift=norm_drift, n_steps=n_total,
                            wall_time=wall)
 
 
 # --- the two methods -------------------------------------------------------------------------
+
+def _checked(run: Callable[..., FreeTopTrajectory], *args: Any) -> FreeTopTrajectory:
+    """``run(*args)`` with NumPy's overflow warnings off, its outputs then required finite (a state
+    within the floating-point range whose energy or tracking overflows is said once, clearly)."""
+    with np.errstate(all="ignore"):
+        traj = run(*args)
+    check_outputs(f"{traj.method} (backend {traj.backend!r})", dict(
+        omega=traj.omega, quaternion=traj.quaternion, euler_angles=traj.euler_angles,
+        energy_drift=traj.energy_drift, angular_momentum_drift=traj.angular_momentum_drift,
+        quaternion_norm_drift=traj.quaternion_norm_drift, omega_error_estimate=traj.omega_error_estimate,
+        rotation_error_estimate=traj.rotation_error_estimate,
+        euler_angle_error_estimate=traj.euler_angle_error_estimate))
+    return traj
+
 
 def _run_dop853(inertia: np.ndarray, w0: np.ndarray, q0: np.ndarray, t: np.ndarray, rtol: float, atol: float,
                 torque: Torque | None, estimate_error: bool, backend: str,

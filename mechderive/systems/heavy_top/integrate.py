@@ -86,7 +86,8 @@ from ...solvers.half_angles import (euler_angles_from_half_angles, follow_fixed_
 # t_eval and the cutting of each output interval into equal steps
 from ...errors import IntegrationError  # noqa: F401 (re-exported)
 from ...solvers.dop853 import check_backend, run_dop853
-from ...solvers.limits import MAX_STEPS, check_fixed_steps, check_max_steps, first_nonfinite_row, nonfinite_state
+from ...solvers.limits import (MAX_STEPS, check_fixed_steps, check_max_steps, check_outputs, first_nonfinite_row,
+                               nonfinite_state)
 from ..free_top.integrate import RICHARDSON_MARGIN, SPLITTING_ORDERS, _check_times, _interval_steps
 
 __all__ = ["integrate_heavy_top", "integrate_heavy_top_ensemble", "HeavyTopTrajectory", "HeavyTopEnsemble",
@@ -425,7 +426,7 @@ def integrate_heavy_top(params: Mapping[str, float], initial: Mapping[str, float
                                         "with method='DOP853'")
         rtol = 1e-10 if rtol is None else check_positive(rtol, "rtol")
         atol = rtol / 100 if atol is None else check_positive(atol, "atol")
-        return _run_dop853(p, w0, q0, args0, rates, t, rtol, atol, estimate_error, backend, max_steps)
+        return _checked(_run_dop853, p, w0, q0, args0, rates, t, rtol, atol, estimate_error, backend, max_steps)
     for name, value in (("rtol", rtol), ("atol", atol)):
         if value is not None:
             raise InvalidInputError(f"expected `{name}` only with method='DOP853', got {name}={value!r} "
@@ -434,7 +435,7 @@ def integrate_heavy_top(params: Mapping[str, float], initial: Mapping[str, float
         raise InvalidInputError("expected a step size `step` > 0 with method='splitting', got step=None")
     step = check_positive(step, "step")
     order = _check_order(4 if order is None else order)
-    return _run_splitting(p, w0, q0, args0, rates, t, step, order, estimate_error, backend, max_steps)
+    return _checked(_run_splitting, p, w0, q0, args0, rates, t, step, order, estimate_error, backend, max_steps)
 
 
 def integrate_heavy_top_ensemble(params: Mapping[str, Any], initial: Mapping[str, Any], t_eval: Sequence[float], *,
@@ -491,15 +492,32 @@ def integrate_heavy_top_ensemble(params: Mapping[str, Any], initial: Mapping[str
             omegas.append(np.stack(y[:3], axis=-1) / I)
             quats.append(np.stack(y[3:], axis=-1))
     wall = time.perf_counter() - start
-    omega = np.stack(omegas)
-    quat, norm_drift = _project(np.stack(quats))
-    e, pf, ps = _drifts(omega, quat, pv)
+    with np.errstate(all="ignore"):
+        omega = np.stack(omegas)
+        quat, norm_drift = _project(np.stack(quats))
+        e, pf, ps = _drifts(omega, quat, pv)
+    check_outputs("the kick–drift–kick splitting", dict(omega=omega, quaternion=quat, energy_drift=e, p_phi_drift=pf,
+                                                        p_psi_drift=ps))
     return HeavyTopEnsemble(t=t, omega=omega, quaternion=quat, params=pv, order=order, energy_drift=e,
                             p_phi_drift=pf, p_psi_drift=ps, quaternion_norm_drift=norm_drift, n_steps=n_total,
                             wall_time=wall)
 
 
 # --- the two methods -------------------------------------------------------------------------
+
+def _checked(run: Callable[..., HeavyTopTrajectory], *args: Any) -> HeavyTopTrajectory:
+    """``run(*args)`` with NumPy's overflow warnings off, its outputs then required finite (a state
+    within the floating-point range whose energy or tracking overflows is said once, clearly)."""
+    with np.errstate(all="ignore"):
+        traj = run(*args)
+    check_outputs(f"{traj.method} (backend {traj.backend!r})", dict(
+        omega=traj.omega, quaternion=traj.quaternion, euler_angles=traj.euler_angles,
+        energy_drift=traj.energy_drift, p_phi_drift=traj.p_phi_drift, p_psi_drift=traj.p_psi_drift,
+        quaternion_norm_drift=traj.quaternion_norm_drift, omega_error_estimate=traj.omega_error_estimate,
+        rotation_error_estimate=traj.rotation_error_estimate,
+        euler_angle_error_estimate=traj.euler_angle_error_estimate))
+    return traj
+
 
 def _finish(p: dict, t: np.ndarray, run: tuple, rates: tuple[float, float], *, method: str, order: int | None,
             n_evaluations: int, n_steps: int | None, wall: float, reference: tuple | None, kind: str,
