@@ -100,12 +100,13 @@ def test_blow_up_is_an_integration_error():
     ode = _blow_up()
     y, stats = ode.solve(np.array([0.0, 0.5]), np.array([1.0]), [], 1e-12, 1e-14)
     assert y[-1, 0] == pytest.approx(2.0, rel=1e-10)  # 1/(1 - 0.5)
-    with pytest.raises(IntegrationError, match="step size fell below|NaN or infinite"):
+    with pytest.raises(IntegrationError, match="step size fell below|NaN or infinity"):
         ode.solve(np.array([0.0, 2.0]), np.array([1.0]), [], 1e-10, 1e-12)
 
 
 def test_step_limit_is_an_integration_error():
-    with pytest.raises(IntegrationError, match="maximum number of steps"):
+    with pytest.raises(IntegrationError, match=r"reach t = 0.9 within max_steps = 5 steps, got to t = 0\.\d+ after "
+                                                r"5 steps: .*raise max_steps"):
         _blow_up().solve(np.array([0.0, 0.9]), np.array([1.0]), [], 1e-12, 1e-14, max_steps=5)
 
 

@@ -18,11 +18,21 @@ the 7-dimensional heavy top.  This module generates one C file holding
 
 compiles it with the system compiler (:mod:`mechderive.core.cbuild`, cached on disk) and calls it
 through :mod:`ctypes`.  The systems are autonomous (no explicit t), as both tops are.
+
+A run never hangs and never returns NaN: the stepper stops with a status — made an
+:class:`~mechderive.errors.IntegrationError` saying where and why — when the state or the
+right-hand side at the initial state is not finite (SciPy's first step would be NaN there, and its
+step loop would never end), when every step tried down to 10 ulp of t meets NaN, when the step
+size collapses, and after ``max_steps`` steps (:data:`~mechderive.solvers.limits.MAX_STEPS`).  Its
+state lives in a buffer owned by Python, so the run goes in calls of bounded wall time
+(:data:`CHUNK_SECONDS`) between which Python sees Ctrl-C; where a call stops does not change a bit
+of the result.
 """
 
 from __future__ import annotations
 
 import ctypes
+import time
 from dataclasses import dataclass
 from typing import Any, Callable, Sequence
 
@@ -30,18 +40,31 @@ import numpy as np
 
 from ..errors import IntegrationError
 from ..core import cbuild
-from .half_angles import DECADE_THRESHOLDS, DECADES
+from .half_angles import DECADE_THRESHOLDS, DECADES, MAX_REFINEMENTS
+from .limits import check_max_steps, nonfinite_start, nonfinite_state, too_many_steps
 
-__all__ = ["CompiledDOP853", "compiled_dop853", "dop853_c_source", "unavailable_error", "MIN_RTOL"]
+__all__ = ["CompiledDOP853", "compiled_dop853", "dop853_c_source", "unavailable_error", "MIN_RTOL", "CHUNK_SECONDS",
+           "FIRST_CHUNK"]
 
 #: The smallest rtol accepted, as in SciPy (100 ε): below it the controller chases rounding.
 MIN_RTOL = 100 * np.finfo(float).eps
 
-_STATUS = {
-    1: "the step size fell below 10 ulp of t (the solution is probably singular or blows up)",
-    2: "the maximum number of steps was reached",
-    3: "the solution became NaN or infinite",
-}
+# the statuses of dop853_solve (ST_* in the C source)
+_DONE, _TOO_SMALL, _MAX_STEPS, _NONFINITE, _NONFINITE_START, _NONFINITE_RHS, _CHUNK = range(7)
+
+#: Wall seconds aimed at per call into C: between calls Python runs its signal handlers, so Ctrl-C
+#: (SIGINT) stops a compiled run within about this time.  The first call makes :data:`FIRST_CHUNK`
+#: right-hand-side evaluations (~4 ms for the heavy top, ~25 ms for the falling cat), each next one
+#: as many as the measured speed fits in this time (at most 4× more than the last).  A call costs
+#: ~50 µs in ctypes: a run of 10⁴ steps (heavy top, 100 nutation periods) makes 2 calls, a run of
+#: 10⁶ steps ~30; the instructions executed in C are those of one call to within ~200
+#: (valgrind --tool=callgrind).
+CHUNK_SECONDS = 0.05
+FIRST_CHUNK = 1 << 16
+
+# C's long, whose size the platform decides (4 bytes on Windows)
+_LONG = np.dtype(f"int{8 * ctypes.sizeof(ctypes.c_long)}")
+_LONG_MAX = int(np.iinfo(_LONG).max)
 
 _DRIVER = r"""
 /* ---- DOP853 (Hairer, Nørsett & Wanner), following scipy.integrate._ivp.rk.DOP853 ---- */
@@ -105,6 +128,7 @@ typedef struct {
     double speed[2];       /* bound of |dz/dt| on the current step */
     double near[2][NDEC];  /* entries of the path below |z| = 10^-k */
     int depth[2];          /* the path is below 10^-k for k < depth (thresholds decrease) */
+    long refinements;      /* halvings left in this step */
 } Track;
 
 /* a piece staying at |z| >= rho (0: unresolved, as if through z = 0) */
@@ -208,6 +232,7 @@ static void track_piece(Track *tr, Step *st, double xa, double za[2][2], double 
 {
     double rho[2] = {0.0, 0.0};
     int ok[2] = {1, 1}, touch[2] = {0, 0};   /* touch: 1 leaving z = 0, 2 arriving, 3 at 0 throughout */
+    int halving_helps = 1;                   /* not with an infinite or NaN length: half of it is as long */
     for (int p = 0; p < 2; p++) {
         /* |q| ~ 1: no overflow; a |z| below 1e-154 squares to 0 and counts as z = 0 */
         double ra2 = za[p][0] * za[p][0] + za[p][1] * za[p][1];
@@ -217,12 +242,14 @@ static void track_piece(Track *tr, Step *st, double xa, double za[2][2], double 
             ok[p] = touch[p] == 3;
         } else {
             double length = tr->speed[p] * st->h * (xb - xa);
+            if (!isfinite(length)) halving_helps = 0;
             rho[p] = 0.5 * (sqrt(ra2) + sqrt(rb2) - length);
             /* the path stays at |z| >= rho, so turns by <= length/rho < pi: the chord's turn */
             ok[p] = rho[p] > 0.0 && length < 0.5 * TWO_PI * rho[p];
         }
     }
-    if (!(ok[0] && ok[1]) && depth < TRACK_DEPTH) {
+    if (!(ok[0] && ok[1]) && depth < TRACK_DEPTH && halving_helps && tr->refinements > 0) {
+        tr->refinements--;
         double xm = 0.5 * (xa + xb), ym[NDIM], zm[2][2];
         dense_eval(st, xm, ym);
         track_pairs(tr, ym, zm);
@@ -247,40 +274,78 @@ static void track_piece(Track *tr, Step *st, double xa, double za[2][2], double 
     }
 }
 
+/* ---- the run, resumable: all that carries from one accepted step to the next ---- */
+typedef struct {
+    double t, h_abs;       /* the time reached and the step to try next */
+    double y[NDIM], f[NDIM];   /* the state at t and f(y) */
+    long nfev, nstep, nrej;
+    int k;                 /* the next output index */
+    int started;           /* 0 in a zeroed Run: dop853_solve starts it */
+    Track tr;
+} Run;
+
+long dop853_run_bytes(void) { return (long)sizeof(Run); }
+
+/* statuses: mechderive.solvers.dop853_c._STATUS */
+#define ST_DONE 0
+#define ST_TOO_SMALL 1
+#define ST_MAX_STEPS 2
+#define ST_NONFINITE 3
+#define ST_NONFINITE_START 4
+#define ST_NONFINITE_RHS 5
+#define ST_CHUNK 6
+
+static int all_finite(const double *v) { for (int i = 0; i < NDIM; i++) if (!isfinite(v[i])) return 0; return 1; }
+
 /* Integrate y' = f(y) from t_out[0] (y0) and write y at every t_out[k] (increasing) into y_out.
-   h_inout: the step to try first (0: choose one); on return the step to continue with.
-   stats: nfev, accepted steps, rejected steps.  Returns 0, or a status of _STATUS.
+   run: a zeroed Run on the first call; the call returns ST_CHUNK once it has made `budget` more
+   right-hand-side evaluations (after a whole step), and a call with the same run and arrays goes on
+   where it stopped, taking the very steps of an uninterrupted run.  Returns a status ST_*.
+   stats: nfev, accepted steps, rejected steps; where: t reached, the step to try next.
    qoff >= 0: also follow the arguments of q0 + i q3 and q1 + i q2 (q0 at y[qoff]) along every
    step, from arg_out[0], arg_out[1] (overwritten where z(0) = 0); their values at t_out go to
    arg_out (n_out x 2), the smallest lower bound of |z| met to closest[0..1] and the counts of
    entries below |z| = 10^-k to closest[2 + NDEC p + k]. */
-int dop853_solve(const double *par, const double *y0, int n_out, const double *t_out, double *y_out,
-                 double rtol, double atol, long max_steps, double *h_inout, long *stats,
+int dop853_solve(Run *run, const double *par, const double *y0, int n_out, const double *t_out, double *y_out,
+                 double rtol, double atol, long max_steps, long budget, long *stats, double *where,
                  int qoff, double *arg_out, double *closest)
 {
     double K[NSTX][NDIM], y[NDIM], y_new[NDIM], ytmp[NDIM], F[7][NDIM];
-    long nfev = 0, nstep = 0, nrej = 0;
-    double t = t_out[0], t_end = t_out[n_out - 1];
-    int k = 1, status = 0;
-    Track tr;
-    for (int i = 0; i < NDIM; i++) { y[i] = y0[i]; y_out[i] = y0[i]; }
-    if (n_out < 2) { stats[0] = stats[1] = stats[2] = 0; return 0; }
-    rhs(y, par, K[0]); nfev++;
-    if (qoff >= 0) {
-        double args0[2] = {arg_out[0], arg_out[1]}, z0[2][2];
-        tr.qoff = qoff;
-        track_start(&tr, y, K[0], args0);
-        track_pairs(&tr, y, z0);
-        arg_out[0] = track_arg(&tr, 0, z0[0]); arg_out[1] = track_arg(&tr, 1, z0[1]);
+    double t_end = t_out[n_out - 1];
+    int status = ST_CHUNK;
+    if (!run->started) {
+        run->started = 1;
+        run->t = t_out[0]; run->k = 1; run->h_abs = 0.0;
+        run->nfev = run->nstep = run->nrej = 0;
+        for (int i = 0; i < NDIM; i++) { run->y[i] = y0[i]; y_out[i] = y0[i]; }
+        if (n_out < 2) { run->k = n_out; status = ST_DONE; goto report; }
+        if (!all_finite(run->y)) { status = ST_NONFINITE_START; goto report; }
+        rhs(run->y, par, run->f); run->nfev++;
+        if (!all_finite(run->f)) { status = ST_NONFINITE_START; goto report; }
+        if (qoff >= 0) {
+            double args0[2] = {arg_out[0], arg_out[1]}, z0[2][2];
+            run->tr.qoff = qoff;
+            track_start(&run->tr, run->y, run->f, args0);
+            track_pairs(&run->tr, run->y, z0);
+            arg_out[0] = track_arg(&run->tr, 0, z0[0]); arg_out[1] = track_arg(&run->tr, 1, z0[1]);
+        }
+        run->h_abs = initial_step(run->y, run->f, par, t_end - run->t, rtol, atol, &run->nfev);
+        /* a NaN step would never fall below the smallest one: the run would not end */
+        if (!(run->h_abs > 0.0 && isfinite(run->h_abs))) { status = ST_NONFINITE_START; goto report; }
     }
-    double h_abs = *h_inout > 0 ? *h_inout : initial_step(y, K[0], par, t_end - t, rtol, atol, &nfev);
+    /* the loop works on local copies (kept in registers); they go back to run at the end */
+    long nfev = run->nfev, nstep = run->nstep, nrej = run->nrej, nfev_stop = run->nfev + budget;
+    double t = run->t, h_abs = run->h_abs;
+    int k = run->k;
+    Track tr = run->tr;
+    for (int i = 0; i < NDIM; i++) { y[i] = run->y[i]; K[0][i] = run->f[i]; }
     while (k < n_out) {
         double min_step = 10 * fabs(nextafter(t, INFINITY) - t);
         if (h_abs < min_step) h_abs = min_step;
-        int rejected = 0;
+        int rejected = 0, nan_error = 0;
         double t_new, h;
         for (;;) {
-            if (h_abs < min_step) { status = 1; goto done; }
+            if (h_abs < min_step) { status = nan_error ? ST_NONFINITE_RHS : ST_TOO_SMALL; goto done; }
             t_new = t + h_abs;
             if (t_new > t_end) t_new = t_end;
             h = t_new - t;
@@ -307,11 +372,14 @@ int dop853_solve(const double *par, const double *y0, int n_out, const double *t
                 h_abs *= factor;
                 break;
             }
-            /* a NaN error norm also lands here and shrinks the step, as in SciPy */
+            /* a NaN error norm also lands here and shrinks the step, as in SciPy: the step may have
+               been too long for the right-hand side; if it stays NaN down to min_step, that is said */
+            nan_error = isnan(err);
             double shrink = SAFETY * pow(err, EXPONENT);
             h_abs *= (shrink > MIN_FACTOR) ? shrink : MIN_FACTOR;
             rejected = 1; nrej++;
         }
+        if (!all_finite(y_new)) { status = ST_NONFINITE; goto done; }
         nstep++;
         Step st = {h, y, y_new, par, K, F, ytmp, &nfev, 0};
         double xa = 0.0, za[2][2], zb[2][2];
@@ -322,6 +390,7 @@ int dop853_solve(const double *par, const double *y0, int n_out, const double *t
                 for (int s = 0; s <= NST; s++) v2 = fmax(v2, K[s][i] * K[s][i] + K[s][j] * K[s][j]);
                 tr.speed[p] = SPEED_MARGIN * sqrt(v2);
             }
+            tr.refinements = TRACK_REFINEMENTS;
             track_pairs(&tr, y, za);
         }
         while (k < n_out && t_out[k] <= t_new) {
@@ -351,19 +420,22 @@ int dop853_solve(const double *par, const double *y0, int n_out, const double *t
             }
         }
         t = t_new;
-        for (int i = 0; i < NDIM; i++) {
-            if (!isfinite(y_new[i])) { status = 3; goto done; }
-            y[i] = y_new[i];
-            K[0][i] = K[NST][i];
-        }
-        if (nstep >= max_steps && k < n_out) { status = 2; goto done; }
+        for (int i = 0; i < NDIM; i++) { y[i] = y_new[i]; K[0][i] = K[NST][i]; }
+        if (k < n_out && nstep >= max_steps) { status = ST_MAX_STEPS; goto done; }
+        if (k < n_out && nfev >= nfev_stop) { status = ST_CHUNK; goto done; }
     }
+    status = ST_DONE;
 done:
-    *h_inout = h_abs;
-    stats[0] = nfev; stats[1] = nstep; stats[2] = nrej;
+    run->t = t; run->h_abs = h_abs; run->k = k;
+    run->nfev = nfev; run->nstep = nstep; run->nrej = nrej;
+    run->tr = tr;
+    for (int i = 0; i < NDIM; i++) { run->y[i] = y[i]; run->f[i] = K[0][i]; }
+report:
+    stats[0] = run->nfev; stats[1] = run->nstep; stats[2] = run->nrej;
+    where[0] = run->t; where[1] = run->h_abs;
     if (qoff >= 0) {
-        closest[0] = tr.closest[0]; closest[1] = tr.closest[1];
-        for (int p = 0; p < 2; p++) for (int k = 0; k < NDEC; k++) closest[2 + NDEC * p + k] = tr.near[p][k];
+        closest[0] = run->tr.closest[0]; closest[1] = run->tr.closest[1];
+        for (int p = 0; p < 2; p++) for (int d = 0; d < NDEC; d++) closest[2 + NDEC * p + d] = run->tr.near[p][d];
     }
     return status;
 }
@@ -397,6 +469,7 @@ def dop853_c_source(exprs: Any, state: Sequence[Any], params: Sequence[Any], *, 
         f"/* {name}: DOP853 on a right-hand side derived by mechderive (generated; safe to delete). */",
         "#include <math.h>",
         f"#define NDIM {n}",
+        f"#define TRACK_REFINEMENTS {MAX_REFINEMENTS}L  /* half_angles.MAX_REFINEMENTS: halvings per step */",
         # SciPy's tableau, printed exactly (repr round-trips); prefixed so no derived name can clash
         _c_array("DOP_A", coef.A), _c_array("DOP_B", coef.B), _c_array("DOP_E3", coef.E3),
         _c_array("DOP_E5", coef.E5), _c_array("DOP_D", coef.D), _c_array("TRACK_DECADE", DECADE_THRESHOLDS),
@@ -415,19 +488,26 @@ class CompiledDOP853:
     n: int
     n_par: int
     _solve: Any
+    _run_words: int = 0
 
     def solve(self, t_eval: np.ndarray, y0: np.ndarray, params: Sequence[float], rtol: float, atol: float, *,
-              max_steps: int = 10**9, track: tuple[int, Sequence[float]] | None = None) -> tuple[np.ndarray, dict]:
+              max_steps: int | None = None, track: tuple[int, Sequence[float]] | None = None,
+              chunk_evaluations: int | None = None) -> tuple[np.ndarray, dict]:
         """(y at every ``t_eval``, shape (N, n); dict(nfev, steps, rejected[, args, closest])).
 
         ``t_eval`` increasing with ``t_eval[0]`` the initial time; ``rtol`` is raised to
         :data:`MIN_RTOL` as in SciPy.  ``track = (qoff, (σ0, δ0))``: also follow the arguments of
         q0 + i q3 and q1 + i q2 (q0 at index ``qoff``) along every step
         (:mod:`mechderive.solvers.half_angles`): ``args`` (N, 2) at ``t_eval``, ``closest`` (2,) and
-        ``near`` (2, DECADES).
-        Raises :class:`~mechderive.errors.IntegrationError` when the step size collapses, the
-        solution stops being finite, or ``max_steps`` is reached.
+        ``near`` (2, DECADES).  ``max_steps``: accepted steps allowed (default
+        :data:`~mechderive.solvers.limits.MAX_STEPS`).  The stepper runs in calls of
+        ``chunk_evaluations`` right-hand-side evaluations each (default: adapted so that a call
+        takes about :data:`CHUNK_SECONDS`), between which Python sees Ctrl-C; the steps and the
+        result do not depend on it.
+        Raises :class:`~mechderive.errors.IntegrationError` when the state or the right-hand side at
+        the initial state is not finite, the step size collapses, or ``max_steps`` is reached.
         """
+        max_steps = min(check_max_steps(max_steps), _LONG_MAX // 2)
         t = np.ascontiguousarray(t_eval, dtype=float)
         y0 = np.ascontiguousarray(y0, dtype=float)
         par = np.ascontiguousarray(params, dtype=float)
@@ -437,23 +517,56 @@ class CompiledDOP853:
         if track is not None and not 0 <= track[0] <= self.n - 4:
             raise IntegrationError(f"expected a quaternion at y[{track[0]}:{track[0] + 4}] to track, got a state of "
                                    f"{self.n} values")
+        label = f"DOP853 ({self.name}, compiled)"
+        if not np.all(np.isfinite(par)):
+            raise nonfinite_start(label, t0=float(t[0]), what="the parameters")
         out = np.empty((t.size, self.n))
         args = np.zeros((t.size, 2))
         closest = np.zeros(2 + 2 * DECADES)
         if track is not None:
             args[0] = track[1]
-        stats = (ctypes.c_long * 3)()
-        h = ctypes.c_double(0.0)
-        status = self._solve(par, y0, int(t.size), t, out, float(max(rtol, MIN_RTOL)), float(atol),
-                             int(max_steps), ctypes.byref(h), stats, -1 if track is None else int(track[0]),
-                             args, closest)
-        if status != 0:
-            raise IntegrationError(f"expected DOP853 ({self.name}, compiled) to reach t = {t[-1]:g}, got: "
-                                   f"{_STATUS.get(status, f'status {status}')}")
+        stats = np.zeros(3, dtype=_LONG)
+        where = np.zeros(2)
+        run = np.zeros(self._run_words)  # the C Run, zeroed: not started
+        qoff = -1 if track is None else int(track[0])
+        rtol = float(max(rtol, MIN_RTOL))
+        budget = FIRST_CHUNK if chunk_evaluations is None else min(max(1, int(chunk_evaluations)), _LONG_MAX // 4)
+        while True:
+            start = time.perf_counter()
+            status = self._solve(run, par, y0, int(t.size), t, out, rtol, float(atol), max_steps, budget, stats,
+                                 where, qoff, args, closest)
+            if status != _CHUNK:
+                break
+            if chunk_evaluations is None:  # as many as fit in CHUNK_SECONDS at the speed just measured
+                fit = budget * CHUNK_SECONDS / max(time.perf_counter() - start, 1e-6)
+                budget = int(min(4.0 * budget, max(fit, 64.0), _LONG_MAX // 4))
+        if status != _DONE:
+            raise self._error(status, label, t, where, stats, max_steps)
         info = dict(nfev=int(stats[0]), steps=int(stats[1]), rejected=int(stats[2]))
         if track is not None:
             info.update(args=args, closest=closest[:2], near=closest[2:].reshape(2, DECADES).astype(np.int64))
         return out, info
+
+    @staticmethod
+    def _error(status: int, label: str, t: np.ndarray, where: np.ndarray, stats: np.ndarray,
+               max_steps: int) -> IntegrationError:
+        t_reached, steps = float(where[0]), int(stats[1])
+        if status == _NONFINITE_START:
+            return nonfinite_start(label, t0=float(t[0]))
+        if status == _NONFINITE:
+            return nonfinite_state(label, t=t_reached, steps=steps)
+        if status == _NONFINITE_RHS:
+            return IntegrationError(f"expected the right-hand side of {label} to be finite near the state at "
+                                    f"t = {t_reached:.6g} (after {steps} steps), got NaN or infinity on every step "
+                                    "tried, down to 10 ulp of t: the motion probably blows up there, or a parameter "
+                                    "is out of floating-point range")
+        if status == _MAX_STEPS:
+            return too_many_steps(label, t=t_reached, t_end=float(t[-1]), steps=steps, max_steps=max_steps)
+        if status == _TOO_SMALL:
+            return IntegrationError(f"expected {label} to reach t = {float(t[-1]):.6g}, got stuck at "
+                                    f"t = {t_reached:.6g}: the step size fell below 10 ulp of t (the solution is "
+                                    "probably singular or blows up there)")
+        return IntegrationError(f"expected {label} to end with a known status, got {status}")  # pragma: no cover
 
 
 def unavailable_error(name: str, fallback: str = "scipy", *, kind: str = "dop853") -> IntegrationError:
@@ -480,9 +593,12 @@ def compiled_dop853(name: str, build: Callable[[], tuple[Any, Sequence[Any], Seq
         return None
     dims = (ctypes.c_int * 2)()
     lib.dop853_dims(dims)
+    lib.dop853_run_bytes.restype = ctypes.c_long
     fn = lib.dop853_solve
     vec = np.ctypeslib.ndpointer(dtype=float, flags="C_CONTIGUOUS")
-    fn.argtypes = [vec, vec, ctypes.c_int, vec, vec, ctypes.c_double, ctypes.c_double, ctypes.c_long,
-                   ctypes.POINTER(ctypes.c_double), ctypes.POINTER(ctypes.c_long), ctypes.c_int, vec, vec]
+    longs = np.ctypeslib.ndpointer(dtype=_LONG, flags="C_CONTIGUOUS")
+    fn.argtypes = [vec, vec, vec, ctypes.c_int, vec, vec, ctypes.c_double, ctypes.c_double, ctypes.c_long,
+                   ctypes.c_long, longs, vec, ctypes.c_int, vec, vec]
     fn.restype = ctypes.c_int
-    return CompiledDOP853(name=name, n=int(dims[0]), n_par=int(dims[1]), _solve=fn)
+    words = -(-int(lib.dop853_run_bytes()) // 8)  # the Run in doubles: 8-byte aligned
+    return CompiledDOP853(name=name, n=int(dims[0]), n_par=int(dims[1]), _solve=fn, _run_words=words)

@@ -17,7 +17,8 @@ Refinement.  On a piece [x_a, x_b] of a step of length h, with |ż| ≤ v (v: 1.
 |ż| among the step's stages), the path of z has length L ≤ v h (x_b - x_a) and stays at
 |z| ≥ ρ = (|z_a| + |z_b| - L)/2 from 0, so its argument changes by at most L/ρ.  The change is
 therefore the wrapped difference d ∈ [-π, π] of the end arguments whenever ρ > 0 and
-L < (2π - |d|) ρ; otherwise the piece is halved (dense output), at most :data:`MAX_DEPTH` times.
+L < (2π - |d|) ρ; otherwise the piece is halved (dense output), at most :data:`MAX_DEPTH` times,
+and at most :data:`MAX_REFINEMENTS` times in one step.
 
 Passages.  Near the pole φ and ψ each turn by about ±π in a short time, the sign depending on
 the side on which the apex passes; an error in q of size e can change the side only if the path
@@ -42,13 +43,18 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-__all__ = ["HalfAngleTracker", "SampleTracker", "MAX_DEPTH", "SPEED_MARGIN", "DECADES", "DECADE_THRESHOLDS",
+__all__ = ["HalfAngleTracker", "SampleTracker", "MAX_DEPTH", "MAX_REFINEMENTS", "SPEED_MARGIN", "DECADES", "DECADE_THRESHOLDS",
            "PASSAGE_MARGIN", "CHUNK", "follow_fixed_steps",
            "euler_angles_from_half_angles", "initial_half_angles", "rotation_angle_between", "passages_within",
            "output_error_estimates"]
 
 #: At most this many halvings of a step (2⁻⁴⁸ of a step is below the resolution of t).
 MAX_DEPTH = 48
+#: At most this many halvings in one step (a few dozen are the most the tests' motions need, near a
+#: pole): a step that would need more — a path whose length bound is infinite or NaN (a state beyond
+#: the floating-point range), or a spin of ~10²⁰ turns per step — leaves the rest of its pieces
+#: unresolved (counted as passages through z = 0), in bounded time instead of up to 2⁴⁸ halvings.
+MAX_REFINEMENTS = 1 << 12
 #: The bound of |ż| on a step: this factor times the largest |ż| among the step's stages.
 SPEED_MARGIN = 1.5
 #: Approaches to z = 0 are counted below each of the thresholds 10⁰, 10⁻¹, …, 10⁻¹⁶.
@@ -145,6 +151,7 @@ class HalfAngleTracker:
             self.speed = [SPEED_MARGIN * math.sqrt(max(r[0] * r[0] + r[3] * r[3] for r in rows)),
                           SPEED_MARGIN * math.sqrt(max(r[1] * r[1] + r[2] * r[2] for r in rows))]
         self._h, self._dense = h, dense
+        self._refinements = MAX_REFINEMENTS
         out = []
         xa, za = 0.0, _pairs(y_old, o)
         for xb, yb in points:
@@ -158,6 +165,7 @@ class HalfAngleTracker:
     def _piece(self, xa: float, za: tuple, xb: float, zb: tuple, depth: int) -> None:
         # touch: 0 ordinary, 1 leaving z = 0 exactly, 2 arriving at z = 0 exactly, 3 at z = 0 throughout
         rho, ok, touch = [0.0, 0.0], [True, True], [0, 0]
+        halving_helps = True  # not with an infinite or NaN length: half of it is as long
         for p in (0, 1):
             # as the C twin: a |z| below 1e-154 squares to 0 and counts as z = 0
             ra2 = za[p][0] * za[p][0] + za[p][1] * za[p][1]
@@ -167,10 +175,12 @@ class HalfAngleTracker:
                 ok[p] = touch[p] == 3
             else:
                 length = self.speed[p] * self._h * (xb - xa)
+                halving_helps = halving_helps and math.isfinite(length)
                 rho[p] = 0.5 * (math.sqrt(ra2) + math.sqrt(rb2) - length)
                 # the path stays at |z| ≥ rho, so turns by ≤ length/rho < π: the chord's turn
                 ok[p] = rho[p] > 0.0 and length < math.pi * rho[p]
-        if not (ok[0] and ok[1]) and depth < MAX_DEPTH:
+        if not (ok[0] and ok[1]) and depth < MAX_DEPTH and halving_helps and self._refinements > 0:
+            self._refinements -= 1
             xm = 0.5 * (xa + xb)
             zm = _pairs(self._dense(xm), self.qoff)
             self._piece(xa, za, xm, zm, depth + 1)
@@ -187,7 +197,7 @@ class HalfAngleTracker:
             if touch[p] == 3 or (touch[p] == 1 and self.departing[p]):
                 pass  # held at z = 0, or leaving it at the start along ż(0): not a passage
             elif not self.departing[p]:
-                # not ok: unresolved after MAX_DEPTH halvings, or touching z = 0: as if through z = 0
+                # not ok: unresolved (MAX_DEPTH, MAX_REFINEMENTS), or touching z = 0: as if through z = 0
                 self._approach(p, rho[p] if ok[p] else 0.0)
 
     def _approach(self, p: int, rho: float) -> None:

@@ -42,6 +42,7 @@ import numpy as np
 
 from ..errors import DerivationError
 from .composition import merged_sequence
+from .limits import nonfinite_state
 
 __all__ = ["kdk_schedule", "stages_per_step", "propagate", "propagate_ensemble"]
 
@@ -80,26 +81,34 @@ def _chained(weights: Sequence[float], step: float) -> tuple[float, list[tuple[f
 
 
 def propagate(stage: StageMap, state: Sequence[float], params: Sequence[float], step: float, n_steps: int,
-              weights: Sequence[float], record: list | None = None) -> list[float]:
+              weights: Sequence[float], record: list | None = None, *, t0: float = 0.0) -> list[float]:
     """Advance one state (a list of floats) by ``n_steps`` composed steps of size ``step``.
 
     Calls ``stage`` 1 + n_steps · s times (s = :func:`stages_per_step`).  Returns the new state.
     ``record``: a list to which the state between every two steps is appended (n_steps - 1 entries,
     each the step's end followed by the next step's leading kick, which the chaining merges into it).
+    A stage map in Python floats (``math``) that overflows or meets an infinite argument raises
+    :class:`~mechderive.errors.IntegrationError` naming the time (``t0``: the time of ``state``); a NaN
+    passes through silently, for the caller to check in the states returned.
     """
     y = [float(v) for v in state]
     if n_steps <= 0:
         return y
     p = tuple(float(v) for v in params)
     head, loop, last = _chained(weights, step)
-    y = stage(*y, 0.0, head, *p)
-    for _ in range(n_steps - 1):
-        for d, k in loop:
+    done = 0
+    try:
+        y = stage(*y, 0.0, head, *p)
+        for done in range(n_steps - 1):
+            for d, k in loop:
+                y = stage(*y, d, k, *p)
+            if record is not None:
+                record.append([float(v) for v in y])
+        done = n_steps - 1
+        for d, k in last:
             y = stage(*y, d, k, *p)
-        if record is not None:
-            record.append([float(v) for v in y])
-    for d, k in last:
-        y = stage(*y, d, k, *p)
+    except (ArithmeticError, ValueError) as exc:  # math.sin(inf), x**2 beyond the float range
+        raise nonfinite_state("the kick–drift–kick splitting", t=t0 + done * step, steps=done, cause=exc) from exc
     return [float(v) for v in y]
 
 

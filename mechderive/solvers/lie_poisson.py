@@ -39,6 +39,7 @@ import numpy as np
 
 from ..errors import DerivationError
 from .composition import merged_sequence
+from .limits import nonfinite_state
 
 __all__ = ["step_schedule", "propagate", "propagate_ensemble", "subflows_per_step"]
 
@@ -73,13 +74,16 @@ def subflows_per_step(weights: Sequence[float]) -> int:
 
 
 def propagate(L: list[float], q: list[float], inertia: Sequence[float], step: float, n_steps: int,
-              weights: Sequence[float], record: list | None = None) -> tuple[list[float], list[float]]:
+              weights: Sequence[float], record: list | None = None, *,
+              t0: float = 0.0) -> tuple[list[float], list[float]]:
     """Advance one body by ``n_steps`` composed steps of size ``step``; returns new (L, q) lists.
 
     ``L``: body angular momentum (3 floats); ``q``: quaternion of A = Rᵀ (4 floats,
     scalar first; not renormalised — its norm changes only by rounding).  ``record``: a list to
     which (L1, L2, L3, q0, q1, q2, q3) is appended between consecutive steps (n_steps - 1 entries;
     each is the step's end followed by the next step's first sub-flow, which the chaining merges).
+    An infinite L (``math.cos(inf)``) raises :class:`~mechderive.errors.IntegrationError` naming the time
+    (``t0``: the time of ``L``, ``q``); a NaN passes through silently, for the caller to check.
     """
     if n_steps <= 0:
         return list(L), list(q)
@@ -118,15 +122,20 @@ def propagate(L: list[float], q: list[float], inertia: Sequence[float], step: fl
                 L1, L2 = L1 + (L2 * ss - L1 * vs), L2 - (L1 * ss + L2 * vs)
                 q0, q3, q1, q2 = c * q0 - s * q3, c * q3 + s * q0, c * q1 + s * q2, c * q2 - s * q1
 
-    run([head_k])
-    if record is None:
-        for _ in range(n_steps - 1):
-            run(loop)
-    else:
-        for _ in range(n_steps - 1):
-            run(loop)
-            record.append((L1, L2, L3, q0, q1, q2, q3))
-    run(last)
+    done = 0
+    try:
+        run([head_k])
+        if record is None:
+            for done in range(n_steps - 1):
+                run(loop)
+        else:
+            for done in range(n_steps - 1):
+                run(loop)
+                record.append((L1, L2, L3, q0, q1, q2, q3))
+        done = n_steps - 1
+        run(last)
+    except (ArithmeticError, ValueError) as exc:  # math.cos(inf): "math domain error"
+        raise nonfinite_state("the Lie–Poisson splitting", t=t0 + done * step, steps=done, cause=exc) from exc
     return [L1, L2, L3], [q0, q1, q2, q3]
 
 

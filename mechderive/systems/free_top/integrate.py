@@ -64,6 +64,8 @@ from ...errors import IntegrationError, InvalidInputError, ShapeError  # noqa: F
 from ...kinematics.conversions import matrix_to_quaternion, quaternion_to_matrix
 from ...solvers import lie_poisson
 from ...solvers.dop853 import check_backend, run_dop853
+from ...solvers.limits import (MAX_STEPS, check_fixed_steps, check_max_steps, check_outputs, first_nonfinite_row,
+                               nonfinite_state)
 from ...solvers.composition import suzuki_fractal, yoshida6
 from ...solvers.half_angles import (euler_angles_from_half_angles, follow_fixed_steps, initial_half_angles,
                                     output_error_estimates)
@@ -320,7 +322,7 @@ def integrate_free_top(I: Sequence[float], omega0: Sequence[float], t_eval: Sequ
                        R0: Any = None, method: str = "DOP853", rtol: float | None = None,
                        atol: float | None = None, step: float | None = None, order: int | None = None,
                        torque: Torque | None = None, estimate_error: bool = True,
-                       backend: str = "auto", strict: bool = True) -> FreeTopTrajectory:
+                       backend: str = "auto", strict: bool = True, max_steps: int | None = None) -> FreeTopTrajectory:
     """Integrate Euler's equations (3.33) and the orientation from ω(t_eval[0]) = omega0, R(t_eval[0]) = R0.
 
     Parameters
@@ -346,11 +348,18 @@ def integrate_free_top(I: Sequence[float], omega0: Sequence[float], t_eval: Sequ
         is floored at 2.3e-14, SciPy's limit; below 2.3e-13 it runs looser, at 10·rtol, and the
         figure is an upper bound ~10× the error); splitting — Richardson with the known order p,
         |y_h - y_(h/2)| · 2^p / (2^p - 1) · 1.25 (the rerun costs twice the main run).
+    max_steps : steps allowed to each run (default :data:`~mechderive.solvers.limits.MAX_STEPS` = 10⁸):
+        DOP853 stops there with an :class:`IntegrationError` saying where it got to; the splitting,
+        whose steps are known in advance, refuses at once.
 
     Raises :class:`~mechderive.errors.UnphysicalInertiaError`, :class:`~mechderive.errors.ShapeError`,
-    :class:`~mechderive.errors.InvalidInputError` on bad input, :class:`IntegrationError` if SciPy fails.
+    :class:`~mechderive.errors.InvalidInputError` on bad input, :class:`IntegrationError` when a run
+    cannot reach ``t_eval[-1]``: the state stops being finite (a value out of floating-point range, or
+    a torque that blows the motion up), the step size collapses, or ``max_steps`` is reached.
+    Compiled runs return to Python every ~0.05 s, so Ctrl-C stops them.
     """
     method = _check_method(method)
+    max_steps = check_max_steps(max_steps)
     backend = check_backend(backend)
     inertia = _check_inertia(I, (3,), strict)
     w0 = as_finite_array(omega0, "omega0", shape=(3,))
@@ -365,7 +374,7 @@ def integrate_free_top(I: Sequence[float], omega0: Sequence[float], t_eval: Sequ
         atol = 1e-12 if atol is None else check_positive(atol, "atol")
         if torque is not None and not callable(torque):
             raise InvalidInputError(f"expected `torque` to be callable τ(t, omega, R), got {torque!r}")
-        return _run_dop853(inertia, w0, q0, t, rtol, atol, torque, estimate_error, backend)
+        return _checked(_run_dop853, inertia, w0, q0, t, rtol, atol, torque, estimate_error, backend, max_steps)
     if backend != "auto":
         raise InvalidInputError(f"expected `backend` only with method='DOP853', got backend={backend!r} "
                                 "with method='splitting'")
@@ -380,16 +389,18 @@ def integrate_free_top(I: Sequence[float], omega0: Sequence[float], t_eval: Sequ
         raise InvalidInputError("expected a step size `step` > 0 with method='splitting', got step=None")
     step = check_positive(step, "step")
     order = _check_order(4 if order is None else order)
-    return _run_splitting(inertia, w0, q0, t, step, order, estimate_error)
+    return _checked(_run_splitting, inertia, w0, q0, t, step, order, estimate_error, max_steps)
 
 
 def integrate_free_top_ensemble(I: Any, omega0: Any, t_eval: Sequence[float], *, step: float, order: int = 4,
-                                R0: Any = None, strict: bool = True) -> FreeTopEnsemble:
+                                R0: Any = None, strict: bool = True, max_steps: int | None = None) -> FreeTopEnsemble:
     """Integrate M free bodies at once with the Lie–Poisson splitting (for stability maps).
 
     ``omega0`` has shape (M, 3); ``I`` shape (3,) (common) or (M, 3) (one body each);
     ``R0`` None, (3, 3) or (M, 3, 3).  Output arrays are (N, M, ·): mind N·M·56 bytes.
     ``strict=False`` accepts moments no rigid body has (as :func:`integrate_free_top`).
+    ``max_steps`` as in :func:`integrate_free_top` (steps of each member); a member whose state stops
+    being finite raises :class:`IntegrationError` naming it.
 
     >>> import numpy as np
     >>> w0 = np.array([[1.0, 0.5, 1.0], [0.0, 1.0, 0.01]])
@@ -403,6 +414,9 @@ def integrate_free_top_ensemble(I: Any, omega0: Any, t_eval: Sequence[float], *,
     t = _check_times(t_eval)
     step = check_positive(step, "step")
     order = _check_order(order)
+    intervals = _interval_steps(t, step)
+    check_fixed_steps("the Lie–Poisson splitting", sum(n for n, _ in intervals), check_max_steps(max_steps),
+                      step=step, t_end=float(t[-1]))
     if R0 is None or np.ndim(R0) == 2:
         q0 = np.broadcast_to(_initial_quaternion(R0), (M, 4))
     else:
@@ -417,15 +431,22 @@ def integrate_free_top_ensemble(I: Any, omega0: Any, t_eval: Sequence[float], *,
     omegas, quats = [w0.copy()], [q0.copy()]
     n_total = 0
     start = time.perf_counter()
-    for n, h in _interval_steps(t, step):
-        lie_poisson.propagate_ensemble(L, q, I_cols, h, n, weights)
-        n_total += n
-        omegas.append((L / np.reshape(I_cols, (3, -1))).T.copy())
-        quats.append(q.T.copy())
+    with np.errstate(all="ignore"):  # a state out of range is said below, not as RuntimeWarnings
+        for k, (n, h) in enumerate(intervals):
+            lie_poisson.propagate_ensemble(L, q, I_cols, h, n, weights)
+            bad = first_nonfinite_row(np.vstack([L, q]).T)
+            if bad is not None:
+                raise nonfinite_state("the Lie–Poisson splitting", t=float(t[k]), steps=n_total, member=bad)
+            n_total += n
+            omegas.append((L / np.reshape(I_cols, (3, -1))).T.copy())
+            quats.append(q.T.copy())
     wall = time.perf_counter() - start
-    omega = np.stack(omegas)
-    quat, norm_drift = _project(np.stack(quats))
-    e_drift, l_drift = _drifts(omega, inertia)
+    with np.errstate(all="ignore"):
+        omega = np.stack(omegas)
+        quat, norm_drift = _project(np.stack(quats))
+        e_drift, l_drift = _drifts(omega, inertia)
+    check_outputs("the Lie–Poisson splitting", dict(omega=omega, quaternion=quat, energy_drift=e_drift,
+                                                    angular_momentum_drift=l_drift))
     return FreeTopEnsemble(t=t, omega=omega, quaternion=quat, order=order, energy_drift=e_drift,
                            angular_momentum_drift=l_drift, quaternion_norm_drift=norm_drift, n_steps=n_total,
                            wall_time=wall)
@@ -433,8 +454,23 @@ def integrate_free_top_ensemble(I: Any, omega0: Any, t_eval: Sequence[float], *,
 
 # --- the two methods -------------------------------------------------------------------------
 
+def _checked(run: Callable[..., FreeTopTrajectory], *args: Any) -> FreeTopTrajectory:
+    """``run(*args)`` with NumPy's overflow warnings off, its outputs then required finite (a state
+    within the floating-point range whose energy or tracking overflows is said once, clearly)."""
+    with np.errstate(all="ignore"):
+        traj = run(*args)
+    check_outputs(f"{traj.method} (backend {traj.backend!r})", dict(
+        omega=traj.omega, quaternion=traj.quaternion, euler_angles=traj.euler_angles,
+        energy_drift=traj.energy_drift, angular_momentum_drift=traj.angular_momentum_drift,
+        quaternion_norm_drift=traj.quaternion_norm_drift, omega_error_estimate=traj.omega_error_estimate,
+        rotation_error_estimate=traj.rotation_error_estimate,
+        euler_angle_error_estimate=traj.euler_angle_error_estimate))
+    return traj
+
+
 def _run_dop853(inertia: np.ndarray, w0: np.ndarray, q0: np.ndarray, t: np.ndarray, rtol: float, atol: float,
-                torque: Torque | None, estimate_error: bool, backend: str) -> FreeTopTrajectory:
+                torque: Torque | None, estimate_error: bool, backend: str,
+                max_steps: int = MAX_STEPS) -> FreeTopTrajectory:
     I1, I2, I3 = (float(x) for x in inertia)
     compiled = None
     if backend == "c" and torque is not None:
@@ -466,7 +502,7 @@ def _run_dop853(inertia: np.ndarray, w0: np.ndarray, q0: np.ndarray, t: np.ndarr
     y0 = np.concatenate([w0, q0])
 
     sol, wall, ref, kind, factor = run_dop853(fun, t, y0, rtol, atol, reference=estimate_error, compiled=compiled,
-                                              params=(I1, I2, I3, 0.0, 0.0, 0.0), track=(3, args0))
+                                              params=(I1, I2, I3, 0.0, 0.0, 0.0), track=(3, args0), max_steps=max_steps)
     reference = None
     if ref is not None:
         reference = (ref.y[:3].T, ref.y[3:].T, ref.args, ref.near)
@@ -520,13 +556,24 @@ def _splitting_path(inertia: np.ndarray, w0: np.ndarray, q0: np.ndarray, args0: 
     """((ω, raw q, (σ, δ), closest, near) at ``t``, steps): the state between every two steps is followed
     by :func:`~mechderive.solvers.half_angles.follow_fixed_steps`."""
     y0 = np.array([*(inertia * w0), *q0])
+    clock = [float(t[0]), 0]  # the time and the steps done where the next pieces start, for messages
 
     def advance(y: np.ndarray, pieces: list[tuple[int, float]]) -> np.ndarray:
-        rows = [tuple(y)]
+        t0, done = clock
+        clock[0] += sum(n * h for n, h in pieces)
+        clock[1] += sum(n for n, _ in pieces)
+        rows, at = [tuple(y)], t0
         for n, h in pieces:
-            L, q = lie_poisson.propagate(list(rows[-1][:3]), list(rows[-1][3:]), inertia, h, n, weights, record=rows)
+            L, q = lie_poisson.propagate(list(rows[-1][:3]), list(rows[-1][3:]), inertia, h, n, weights, record=rows,
+                                         t0=at)
             rows.append((*L, *q))
-        return np.array(rows)
+            at += n * h
+        out = np.array(rows)
+        bad = first_nonfinite_row(out)
+        if bad is not None:  # NaN passes through math's functions silently: said here, per batch
+            steps = np.repeat([h for _, h in pieces], [n for n, _ in pieces])[:max(bad - 1, 0)]
+            raise nonfinite_state("the Lie–Poisson splitting", t=t0 + float(np.sum(steps)), steps=done + len(steps))
+        return out
 
     intervals = _interval_steps(t, step, refine)
     ends, args, tracker = follow_fixed_steps(y0, inertia, args0, intervals, advance)
@@ -535,8 +582,12 @@ def _splitting_path(inertia: np.ndarray, w0: np.ndarray, q0: np.ndarray, args0: 
 
 
 def _run_splitting(inertia: np.ndarray, w0: np.ndarray, q0: np.ndarray, t: np.ndarray, step: float, order: int,
-                   estimate_error: bool) -> FreeTopTrajectory:
+                   estimate_error: bool, max_steps: int = MAX_STEPS) -> FreeTopTrajectory:
     weights = SPLITTING_ORDERS[order]
+    # the steps are known before running: the longest run (the estimate's, at step/2) is checked
+    refine = 2 if estimate_error else 1
+    check_fixed_steps("the Lie–Poisson splitting", sum(n for n, _ in _interval_steps(t, step, refine)), max_steps,
+                      step=step / refine, t_end=float(t[-1]))
     q0, args0 = _initial_half_angles(q0)
     start = time.perf_counter()
     run, n_steps = _splitting_path(inertia, w0, q0, args0, t, step, weights)

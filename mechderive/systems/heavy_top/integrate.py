@@ -86,6 +86,8 @@ from ...solvers.half_angles import (euler_angles_from_half_angles, follow_fixed_
 # t_eval and the cutting of each output interval into equal steps
 from ...errors import IntegrationError  # noqa: F401 (re-exported)
 from ...solvers.dop853 import check_backend, run_dop853
+from ...solvers.limits import (MAX_STEPS, check_fixed_steps, check_max_steps, check_outputs, first_nonfinite_row,
+                               nonfinite_state)
 from ..free_top.integrate import RICHARDSON_MARGIN, SPLITTING_ORDERS, _check_times, _interval_steps
 
 __all__ = ["integrate_heavy_top", "integrate_heavy_top_ensemble", "HeavyTopTrajectory", "HeavyTopEnsemble",
@@ -362,7 +364,8 @@ def _project(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def integrate_heavy_top(params: Mapping[str, float], initial: Mapping[str, float], t_eval: Sequence[float], *,
                         method: str = "DOP853", rtol: float | None = None, atol: float | None = None,
                         step: float | None = None, order: int | None = None,
-                        estimate_error: bool = True, backend: str = "auto", strict: bool = True) -> HeavyTopTrajectory:
+                        estimate_error: bool = True, backend: str = "auto", strict: bool = True,
+                        max_steps: int | None = None) -> HeavyTopTrajectory:
     """Integrate the heavy symmetric top from Euler angles and rates at ``t_eval[0]``.
 
     Parameters
@@ -388,12 +391,19 @@ def integrate_heavy_top(params: Mapping[str, float], initial: Mapping[str, float
         is floored at 2.3e-14, SciPy's limit; below 2.3e-13 it runs looser, at 10·rtol, and the
         figure is an upper bound ~10× the error); splitting — Richardson with the known order p,
         |y_h - y_(h/2)| · 2^p / (2^p - 1) · 1.25 (the rerun costs twice the main run).
+    max_steps : steps allowed to each run (default :data:`~mechderive.solvers.limits.MAX_STEPS` = 10⁸):
+        DOP853 stops there with an :class:`IntegrationError` saying where it got to; the splitting,
+        whose steps are known in advance, refuses at once.
 
     Raises :class:`~mechderive.errors.InvalidInputError` (or its subclasses
     :class:`~mechderive.errors.UnphysicalInertiaError`, :class:`~mechderive.errors.NonFiniteValueError`)
-    on bad input, :class:`IntegrationError` if SciPy fails.
+    on bad input, :class:`IntegrationError` when a run cannot reach ``t_eval[-1]``: the state stops
+    being finite (a value out of floating-point range, or a motion that blows up), the step size
+    collapses, or ``max_steps`` is reached.  Compiled runs return to Python every ~0.05 s, so Ctrl-C
+    stops them.
     """
     method = _check_method(method)
+    max_steps = check_max_steps(max_steps)
     if method == "DOP853":
         backend = check_backend(backend)
     elif backend not in SPLITTING_BACKENDS:
@@ -416,7 +426,7 @@ def integrate_heavy_top(params: Mapping[str, float], initial: Mapping[str, float
                                         "with method='DOP853'")
         rtol = 1e-10 if rtol is None else check_positive(rtol, "rtol")
         atol = rtol / 100 if atol is None else check_positive(atol, "atol")
-        return _run_dop853(p, w0, q0, args0, rates, t, rtol, atol, estimate_error, backend)
+        return _checked(_run_dop853, p, w0, q0, args0, rates, t, rtol, atol, estimate_error, backend, max_steps)
     for name, value in (("rtol", rtol), ("atol", atol)):
         if value is not None:
             raise InvalidInputError(f"expected `{name}` only with method='DOP853', got {name}={value!r} "
@@ -425,16 +435,19 @@ def integrate_heavy_top(params: Mapping[str, float], initial: Mapping[str, float
         raise InvalidInputError("expected a step size `step` > 0 with method='splitting', got step=None")
     step = check_positive(step, "step")
     order = _check_order(4 if order is None else order)
-    return _run_splitting(p, w0, q0, args0, rates, t, step, order, estimate_error, backend)
+    return _checked(_run_splitting, p, w0, q0, args0, rates, t, step, order, estimate_error, backend, max_steps)
 
 
 def integrate_heavy_top_ensemble(params: Mapping[str, Any], initial: Mapping[str, Any], t_eval: Sequence[float], *,
-                                 step: float, order: int = 4, strict: bool = True) -> HeavyTopEnsemble:
+                                 step: float, order: int = 4, strict: bool = True,
+                                 max_steps: int | None = None) -> HeavyTopEnsemble:
     """Integrate M heavy tops at once with the splitting (vectorised over members).
 
     Every value of ``params`` and ``initial`` may be a scalar or an array of shape (M,); M is
     their common broadcast length.  Outputs are (N, M, ·): mind N·M·56 bytes.  ``params`` may give
     ``Mgl`` in place of M, g, l; ``strict=False`` accepts tops no rigid body is (see :func:`check_params`).
+    ``max_steps`` as in :func:`integrate_heavy_top` (steps of each member); a member whose state stops
+    being finite raises :class:`IntegrationError` naming it.
 
     >>> import numpy as np
     >>> ens = integrate_heavy_top_ensemble(dict(I1=1.0, I3=0.5, M=1.0, g=4.0, l=0.25),
@@ -458,6 +471,9 @@ def integrate_heavy_top_ensemble(params: Mapping[str, Any], initial: Mapping[str
     t = _check_times(t_eval)
     step = check_positive(step, "step")
     weights = SPLITTING_ORDERS[_check_order(order)]
+    intervals = _interval_steps(t, step)
+    check_fixed_steps("the kick–drift–kick splitting", sum(n for n, _ in intervals), check_max_steps(max_steps),
+                      step=step, t_end=float(t[-1]))
     w0, q0 = initial_state(init)
     I = np.stack(np.broadcast_arrays(pv["I1"], pv["I1"], pv["I3"]), axis=-1) * np.ones((M, 1))
     y = [*(I * w0).T, *q0.T]
@@ -466,21 +482,42 @@ def integrate_heavy_top_ensemble(params: Mapping[str, Any], initial: Mapping[str
     omegas, quats = [w0.copy()], [q0.copy()]
     n_total = 0
     start = time.perf_counter()
-    for n, h in _interval_steps(t, step):
-        y = kick_drift.propagate_ensemble(stage, y, par, h, n, weights)
-        n_total += n
-        omegas.append(np.stack(y[:3], axis=-1) / I)
-        quats.append(np.stack(y[3:], axis=-1))
+    with np.errstate(all="ignore"):  # a state out of range is said below, not as RuntimeWarnings
+        for k, (n, h) in enumerate(intervals):
+            y = kick_drift.propagate_ensemble(stage, y, par, h, n, weights)
+            bad = first_nonfinite_row(np.stack(y, axis=-1))
+            if bad is not None:
+                raise nonfinite_state("the kick–drift–kick splitting", t=float(t[k]), steps=n_total, member=bad)
+            n_total += n
+            omegas.append(np.stack(y[:3], axis=-1) / I)
+            quats.append(np.stack(y[3:], axis=-1))
     wall = time.perf_counter() - start
-    omega = np.stack(omegas)
-    quat, norm_drift = _project(np.stack(quats))
-    e, pf, ps = _drifts(omega, quat, pv)
+    with np.errstate(all="ignore"):
+        omega = np.stack(omegas)
+        quat, norm_drift = _project(np.stack(quats))
+        e, pf, ps = _drifts(omega, quat, pv)
+    check_outputs("the kick–drift–kick splitting", dict(omega=omega, quaternion=quat, energy_drift=e, p_phi_drift=pf,
+                                                        p_psi_drift=ps))
     return HeavyTopEnsemble(t=t, omega=omega, quaternion=quat, params=pv, order=order, energy_drift=e,
                             p_phi_drift=pf, p_psi_drift=ps, quaternion_norm_drift=norm_drift, n_steps=n_total,
                             wall_time=wall)
 
 
 # --- the two methods -------------------------------------------------------------------------
+
+def _checked(run: Callable[..., HeavyTopTrajectory], *args: Any) -> HeavyTopTrajectory:
+    """``run(*args)`` with NumPy's overflow warnings off, its outputs then required finite (a state
+    within the floating-point range whose energy or tracking overflows is said once, clearly)."""
+    with np.errstate(all="ignore"):
+        traj = run(*args)
+    check_outputs(f"{traj.method} (backend {traj.backend!r})", dict(
+        omega=traj.omega, quaternion=traj.quaternion, euler_angles=traj.euler_angles,
+        energy_drift=traj.energy_drift, p_phi_drift=traj.p_phi_drift, p_psi_drift=traj.p_psi_drift,
+        quaternion_norm_drift=traj.quaternion_norm_drift, omega_error_estimate=traj.omega_error_estimate,
+        rotation_error_estimate=traj.rotation_error_estimate,
+        euler_angle_error_estimate=traj.euler_angle_error_estimate))
+    return traj
+
 
 def _finish(p: dict, t: np.ndarray, run: tuple, rates: tuple[float, float], *, method: str, order: int | None,
             n_evaluations: int, n_steps: int | None, wall: float, reference: tuple | None, kind: str,
@@ -543,7 +580,8 @@ def _scipy_rhs(args: tuple) -> Callable[[float, np.ndarray], list]:
 
 
 def _run_dop853(p: dict, w0: np.ndarray, q0: np.ndarray, args0: tuple[float, float], rates: tuple[float, float],
-                t: np.ndarray, rtol: float, atol: float, estimate_error: bool, backend: str) -> HeavyTopTrajectory:
+                t: np.ndarray, rtol: float, atol: float, estimate_error: bool, backend: str,
+                max_steps: int = MAX_STEPS) -> HeavyTopTrajectory:
     args = tuple(_param_values(p))
     y0 = np.concatenate([w0, q0])
     compiled = None if backend == "scipy" else _compiled_dop853()
@@ -553,7 +591,7 @@ def _run_dop853(p: dict, w0: np.ndarray, q0: np.ndarray, args0: tuple[float, flo
     fun = None if compiled is not None else _scipy_rhs(args)
 
     sol, wall, ref, kind, factor = run_dop853(fun, t, y0, rtol, atol, reference=estimate_error, compiled=compiled,
-                                              params=args, track=(3, args0))
+                                              params=args, track=(3, args0), max_steps=max_steps)
     reference = None
     if ref is not None:
         reference = (ref.y[:3].T, ref.y[3:].T, ref.args, ref.closest, ref.near)
@@ -586,15 +624,26 @@ def _splitting_path(p: dict, w0: np.ndarray, q0: np.ndarray, args0: tuple[float,
     par = _param_values(p)
     y0 = np.array([*(inertia * w0), *q0])
     stage = None if compiled is not None else _stage()
+    clock = [float(t[0]), 0]  # the time and the steps done where the next pieces start, for messages
 
     def advance(y: np.ndarray, pieces: list[tuple[int, float]]) -> np.ndarray:
+        t0, done = clock
+        clock[0] += sum(n * h for n, h in pieces)
+        clock[1] += sum(n for n, _ in pieces)
         if compiled is not None:
-            return compiled.propagate_recorded(y, par, pieces, weights)
-        rows = [y.tolist()]
+            return compiled.propagate_recorded(y, par, pieces, weights, t0=t0)
+        rows, at = [y.tolist()], t0
         for n, h in pieces:
-            end = kick_drift.propagate(stage, rows[-1], par, h, n, weights, record=rows)
+            end = kick_drift.propagate(stage, rows[-1], par, h, n, weights, record=rows, t0=at)
             rows.append(end)
-        return np.array(rows)
+            at += n * h
+        out = np.array(rows)
+        bad = first_nonfinite_row(out)
+        if bad is not None:  # NaN passes through math's functions silently: said here, per batch
+            steps = np.repeat([h for _, h in pieces], [n for n, _ in pieces])[:max(bad - 1, 0)]
+            raise nonfinite_state("the kick–drift–kick splitting (Python)", t=t0 + float(np.sum(steps)),
+                                  steps=done + len(steps))
+        return out
 
     intervals = _interval_steps(t, step, refine)
     ends, args, tracker = follow_fixed_steps(y0, inertia, args0, intervals, advance)
@@ -604,8 +653,12 @@ def _splitting_path(p: dict, w0: np.ndarray, q0: np.ndarray, args0: tuple[float,
 
 def _run_splitting(p: dict, w0: np.ndarray, q0: np.ndarray, args0: tuple[float, float], rates: tuple[float, float],
                    t: np.ndarray, step: float, order: int, estimate_error: bool,
-                   backend: str = "auto") -> HeavyTopTrajectory:
+                   backend: str = "auto", max_steps: int = MAX_STEPS) -> HeavyTopTrajectory:
     weights = SPLITTING_ORDERS[order]
+    # the steps are known before running: the longest run (the estimate's, at step/2) is checked
+    refine = 2 if estimate_error else 1
+    check_fixed_steps("the kick–drift–kick splitting", sum(n for n, _ in _interval_steps(t, step, refine)), max_steps,
+                      step=step / refine, t_end=float(t[-1]))
     # compile (once per process) outside the timed run
     compiled = None if backend == "python" else _compiled_splitting()
     if compiled is None and backend == "c":
