@@ -263,8 +263,15 @@ def test_hints_for_clashing_names():
 def test_bad_options():
     with pytest.raises(InvalidInputError, match="expected a system among free_top, heavy_top, got 'spinning'"):
         check("E = E", "spinning")
-    with pytest.raises(InvalidInputError, match="expected points between 20 and 1000, got 5"):
+    with pytest.raises(InvalidInputError, match="^points: expected an integer between 20 and 1000, got 5$"):
         check("E = E", HEAVY, points=5)
+    for budget in (0, -1, float("nan"), float("inf"), 601, "5", True):
+        with pytest.raises(InvalidInputError, match="^budget: expected a time of more than 0 and at most 600 s"):
+            check("E = E", HEAVY, budget=budget)
+    with pytest.raises(InvalidInputError, match="^seed: expected an integer, got 1.5$"):
+        check("E = E", HEAVY, seed=1.5)
+    with pytest.raises(InvalidInputError, match="^given: expected a list of 'name = expression' strings"):
+        check("E = E", HEAVY, given="I1 = 1")
 
 
 # --- the command line ------------------------------------------------------------------------------
@@ -464,9 +471,17 @@ def test_cancellations_that_hold_are_identities(claim, method):
 
 
 def test_escalation_respects_the_budget():
-    # seeing 1e-100 needs more than the base 60 digits; with no time for more nothing is decided
-    v = check("sin(theta) = sin(theta + 1e-100)", budget=0)
-    assert v.verdict == "undecided" and "needs more digits than the time budget allows" in v.detail
+    import sympy as sp
+
+    from mechderive.formulas.significance import compare
+
+    # with no time left nothing is evaluated, and nothing decided
+    x = sp.Symbol("x", real=True)
+    late = compare(sp.sin(x), sp.sin(x + sp.Rational(1, 10**100)), {x: sp.Rational(7, 5)}, base=60,
+                   deadline=time.monotonic() - 1)
+    assert late.kind == "reject" and late.reason == "the time budget (--budget) was spent before this point"
+    v = check("sin(theta) = sin(theta + 1e-100)", budget=1e-3)  # 1 ms: not even enough to parse
+    assert v.verdict == "undecided" and "the time budget of 0.001 s (--budget) ran out while " in v.detail, v
 
 
 def test_compare_at_one_point():
