@@ -13,15 +13,19 @@ decision: parsing, expanding ``dt``, proving, sampling, simplifying.  It is enfo
   swallow it.  An interrupted SymPy call leaves no wrong state behind: SymPy's caches store a
   result only after it is computed, and an assumption only once it is known.
 
-Scopes nest (a step inside the whole decision): the timer is armed for the innermost scope's
-deadline, which is never later than an enclosing one's, and re-armed for the enclosing scope
-when it ends; the alarm is raised in the innermost expired scope.  The bookkeeping runs with
-``SIGALRM`` blocked.  An alarm that falls in a finaliser or a gc callback, where Python cannot
-raise it, is dropped silently (not printed as "Exception ignored") and raised again 0.1 s later.  The timer is used only in the main thread, when ``setitimer`` exists and
-when nobody else's timer is armed (it is left alone); otherwise only the cooperative checks
-apply, and a caller bounds the size of what a single call gets instead (:mod:`.check` refuses
-expansions beyond :data:`~.check.MAX_NODES` nodes and runs proofs only on small expressions).
-The handler and the timer are restored when the outermost scope ends.
+Scopes nest (a step inside the whole decision, a decision inside a caller's scope): the timer
+is armed for the innermost scope's deadline, which is never later than an enclosing one's, and
+re-armed for the enclosing scope when it ends; the alarm ends the outermost scope whose
+deadline has passed (inner scopes let it through).  The bookkeeping runs with ``SIGALRM``
+blocked.  An alarm that falls in a finaliser or a gc callback, where Python cannot raise it,
+is dropped silently (not printed as "Exception ignored") and raised again 0.1 s later.  The
+SIGALRM handler and the unraisable hook are installed by the outermost scope and restored
+when it ends.
+
+The timer is used only in the main thread, when ``setitimer`` exists and when nobody else's
+timer is armed (that one is left alone); otherwise only the cooperative checks apply, and
+:mod:`.check` bounds what a single call gets instead: no proof is attempted, and expansions
+stop at :data:`~.check.MAX_UNTIMED_NODES` nodes.
 """
 
 from __future__ import annotations
@@ -66,17 +70,21 @@ def timer_usable() -> bool:
     return bool(_scopes) or signal.getitimer(signal.ITIMER_REAL)[0] == 0
 
 
+_busy = [False]  # True while the scopes are updated: the handler then leaves them alone
+
+
 @contextmanager
-def _blocked() -> Iterator[None]:
-    """SIGALRM held back while the scopes are updated (delivered, if due, right after)."""
-    if not hasattr(signal, "pthread_sigmask"):
-        yield
-        return
-    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGALRM})
+def _bookkeeping() -> Iterator[None]:
+    """The scopes updated with SIGALRM held back, and the handler told not to raise meanwhile (a
+    signal that arrived just before is handled at the next Python call, possibly in here)."""
+    _busy[0] = True
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGALRM}) if hasattr(signal, "pthread_sigmask") else None
     try:
         yield
     finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+        if old is not None:
+            signal.pthread_sigmask(signal.SIG_SETMASK, old)
+        _busy[0] = False
 
 
 def _arm() -> None:
@@ -87,11 +95,22 @@ def _arm() -> None:
 
 
 def _alarm(signum, frame) -> None:
-    if _scopes and _scopes[-1].at <= time.monotonic() + _SHORTEST:
-        # a reminder, in case some code swallows the exception: the scope's end re-arms it anyway
-        signal.setitimer(signal.ITIMER_REAL, 0.1)
-        raise OutOfTime(_scopes[-1])
+    if _busy[0]:
+        return  # the bookkeeping re-arms the timer itself
+    now = time.monotonic() + _SHORTEST
+    for scope in _scopes:  # the outermost expired scope: what runs inside it is moot
+        if scope.at <= now:
+            # a reminder, in case some code swallows the exception: the scope's end re-arms it anyway
+            signal.setitimer(signal.ITIMER_REAL, 0.1)
+            raise OutOfTime(scope)
     _arm()  # early, or for a scope that has ended
+
+
+def _settle() -> None:
+    """Let no SIGALRM outlive our handler: one held back by the mask is taken, one already received is
+    handled here (a Python call handles pending signals), while the handler is still ours."""
+    if hasattr(signal, "sigpending") and signal.SIGALRM in signal.sigpending():
+        signal.sigwait({signal.SIGALRM})
 
 
 def _unraisable(unraisable) -> None:
@@ -107,7 +126,7 @@ def _timed(scope: _Scope) -> Iterator[None]:
     """Interrupt the block at ``scope.at`` (no later than an enclosing scope); see :func:`timer_usable`."""
     depth = len(_scopes)
     try:
-        with _blocked():
+        with _bookkeeping():
             if not _scopes:
                 _previous[:] = [signal.signal(signal.SIGALRM, _alarm), sys.unraisablehook]
                 sys.unraisablehook = _unraisable
@@ -117,10 +136,11 @@ def _timed(scope: _Scope) -> Iterator[None]:
             _arm()
         yield
     finally:
-        with _blocked():
+        with _bookkeeping():
             del _scopes[depth:]  # this scope, and any inner one whose own exit was interrupted
             _arm()
             if not _scopes and _previous:
+                _settle()
                 handler, sys.unraisablehook = _previous
                 signal.signal(signal.SIGALRM, signal.SIG_DFL if handler is None else handler)
                 _previous.clear()

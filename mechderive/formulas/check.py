@@ -84,8 +84,9 @@ import keyword
 import math
 import random
 import re
+from contextlib import contextmanager
 from dataclasses import dataclass
-from typing import Any, Sequence
+from typing import Any, Iterator, Sequence
 
 import mpmath
 import sympy as sp
@@ -100,7 +101,8 @@ from .significance import Comparison, compare
 from .size import brief, tree_size
 from .systems import SYSTEMS, System, get_system
 
-__all__ = ["Verdict", "check", "EXIT_STATUS", "MAX_NODES", "MAX_UNTIMED_NODES", "MAX_INPUT_NODES", "MAX_BUDGET"]
+__all__ = ["Verdict", "check", "EXIT_STATUS", "MAX_NODES", "MAX_UNTIMED_NODES", "MAX_INPUT_NODES",
+           "MAX_INPUT_DEPTH", "MAX_BUDGET"]
 
 #: Exit status of ``mechderive check`` for each verdict (2 is an input error).
 EXIT_STATUS = {"identity": 0, "on-shell": 0, "false": 1, "undecided": 3}
@@ -113,6 +115,9 @@ MAX_NODES = 100_000
 MAX_UNTIMED_NODES = 10_000
 #: The largest tree a parsed side or --given value may have once the --given names are substituted.
 MAX_INPUT_NODES = 20_000
+#: The deepest nesting a parsed side or --given value may have once the --given names are substituted
+#: (the parser allows 40 in one text; SymPy's recursive algorithms fail near 150 once dt is expanded).
+MAX_INPUT_DEPTH = 60
 #: The longest time budget accepted, in seconds.
 MAX_BUDGET = 600
 _MAX_BITS = 3400  # numbers below about 10^1000, as the parser's literals
@@ -122,6 +127,9 @@ _QUALIFY = 0.3  # seconds allowed, even once the budget is spent, to find the po
 _DEGREE = 20  # the assumed degree in the false-positive bound
 _MAX_GIVEN = 20
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+# What SymPy itself raises on some inputs while building or transforming an expression
+# (InvalidInputError, a ValueError, is caught before).
+_SYMPY_ERRORS = (TypeError, ValueError, ArithmeticError, RecursionError, NotImplementedError)
 
 
 class _TooLarge(Exception):
@@ -181,6 +189,10 @@ def _bounded_input(expr: sp.Expr, what: str) -> None:
     if tree_size(expr, MAX_INPUT_NODES + 1) > MAX_INPUT_NODES:
         raise InvalidInputError(f"expected {what} of at most {MAX_INPUT_NODES} nodes once the --given names are "
                                 f"substituted, got more")
+    depth = _nesting(expr)
+    if depth > MAX_INPUT_DEPTH:
+        raise InvalidInputError(f"expected {what} nested at most {MAX_INPUT_DEPTH} deep once the --given names are "
+                                f"substituted, got {depth}")
     for r in expr.atoms(sp.Rational):
         if int(r.p).bit_length() > _MAX_BITS or int(r.q).bit_length() > _MAX_BITS:
             raise InvalidInputError(f"expected numbers below 10^1000 in {what}, got one of "
@@ -189,6 +201,16 @@ def _bounded_input(expr: sp.Expr, what: str) -> None:
         if isinstance(p.exp, sp.Rational) and (abs(p.exp.p) > MAX_EXPONENT or p.exp.q > MAX_EXPONENT):
             raise InvalidInputError(f"expected exponents p/q with |p|, q ≤ {MAX_EXPONENT} in {what} once the "
                                     f"--given names are substituted, got {brief(p.exp, 40)}")
+
+
+def _nesting(expr: sp.Basic) -> int:
+    """The depth of ``expr``'s tree (a leaf is 1), walked without recursion."""
+    deepest, stack = 0, [(expr, 1)]
+    while stack:
+        node, depth = stack.pop()
+        deepest = max(deepest, depth)
+        stack.extend((a, depth + 1) for a in node.args)
+    return deepest
 
 
 def _parse_givens(given: Sequence[str], system: System, rename: dict | None = None) -> tuple[dict, list, list]:
@@ -207,11 +229,23 @@ def _parse_givens(given: Sequence[str], system: System, rename: dict | None = No
     specs: list[tuple[sp.Symbol, sp.Expr]] = []
     new: list[str] = []
     for text in given:
-        try:
+        with _naming(_label("given", text)):
             _parse_given(text, system, rename, names, specs, new)
-        except InvalidInputError as exc:
-            raise InvalidInputError(f"{_label('given', text)}: {exc}") from None
     return names, specs, new
+
+
+@contextmanager
+def _naming(label: str) -> Iterator[None]:
+    """An input error inside, prefixed with ``label``; so is an error SymPy raises while building the
+    expression (``atan2(0, log(0))``: "Invalid NaN comparison"), which is the input's, not a bug."""
+    try:
+        yield
+    except InvalidInputError as exc:
+        raise InvalidInputError(f"{label}: {exc}") from None
+    except _SYMPY_ERRORS as exc:
+        what = str(exc).strip().splitlines()[0][:80] if str(exc).strip() else type(exc).__name__
+        raise InvalidInputError(f"{label}: expected an expression SymPy can build, got {type(exc).__name__}: "
+                                f"{what}") from None
 
 
 def _parse_given(text: object, system: System, rename: dict, names: dict, specs: list, new: list) -> None:
@@ -256,12 +290,10 @@ def _parse_given(text: object, system: System, rename: dict, names: dict, specs:
 
 def _parse_claim(claim: object, names: dict, system: System) -> tuple[sp.Expr, sp.Expr]:
     """(LHS, RHS) of the claim, within the input limits; an error names the claim."""
-    try:
+    with _naming(_label("claim", claim)):
         sides = parse_claim(claim, names, hints=system.hints)
         for side, x in zip(("left", "right"), sides):
             _bounded_input(x, f"the {side}-hand side")
-    except InvalidInputError as exc:
-        raise InvalidInputError(f"{_label('claim', claim)}: {exc}") from None
     return sides
 
 
@@ -594,6 +626,9 @@ def check(claim: str, system: str = "heavy_top", *, given: Sequence[str] = (), p
         return Verdict("undecided", "none", f"the time budget of {budget:g} s (--budget) ran out while {clock.doing}")
     except _TooLarge as exc:
         return Verdict("undecided", "none", str(exc))
+    except RecursionError:  # (a safety net: the input's nesting is bounded, an expansion's may still grow)
+        return Verdict("undecided", "none", f"the expression is nested too deeply for SymPy's recursive algorithms "
+                       f"while {clock.doing}")
 
 
 def _check(claim: str, sys_: System, given: Sequence[str], clock: Budget, *, points: int, seed: int,
