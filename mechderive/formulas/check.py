@@ -80,13 +80,11 @@ within the budget (its expansion along the motion alone takes about 15 s).
 
 from __future__ import annotations
 
-import keyword
 import math
 import random
 import re
-from contextlib import contextmanager
 from dataclasses import dataclass
-from typing import Any, Iterator, Sequence
+from typing import Any, Sequence
 
 import mpmath
 import sympy as sp
@@ -95,7 +93,9 @@ from ..core.simplify import is_zero
 from ..errors import InvalidInputError
 from .budget import Budget, OutOfTime, timer_usable
 from .evaluate import CannotEvaluate
-from .parse import FUNCTIONS, MAX_EXPONENT, MAX_LENGTH, dt, parse_claim, parse_expression
+from .inputs import (MAX_GIVEN, MAX_INPUT_DEPTH, MAX_INPUT_NODES, parse_claim_within_limits, parse_givens,
+                     shown as _shown, specialise)
+from .parse import MAX_LENGTH, dt
 from .sampling import Draw, PointSampler, decimal_text
 from .significance import Comparison, compare
 from .size import brief, tree_size
@@ -113,23 +113,13 @@ MAX_NODES = 100_000
 #: The same limit where no timer can interrupt a step (outside the main thread: :mod:`.budget`), so that
 #: a single differentiation stays short (about 1 s).
 MAX_UNTIMED_NODES = 10_000
-#: The largest tree a parsed side or --given value may have once the --given names are substituted.
-MAX_INPUT_NODES = 20_000
-#: The deepest nesting a parsed side or --given value may have once the --given names are substituted
-#: (the parser allows 40 in one text; SymPy's recursive algorithms fail near 150 once dt is expanded).
-MAX_INPUT_DEPTH = 60
 #: The longest time budget accepted, in seconds.
 MAX_BUDGET = 600
-_MAX_BITS = 3400  # numbers below about 10^1000, as the parser's literals
 _SIMPLIFY_SHARE = 0.8  # of the time left: sympy.simplify, the last step of a decision (the rest may qualify it)
 _BACKSTOP = 0.75  # seconds after the budget's end at which any step still running is interrupted
 _QUALIFY = 0.3  # seconds allowed, even once the budget is spent, to find the positivity a proof used
 _DEGREE = 20  # the assumed degree in the false-positive bound
-_MAX_GIVEN = 20
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
-# What SymPy itself raises on some inputs while building or transforming an expression
-# (InvalidInputError, a ValueError, is caught before).
-_SYMPY_ERRORS = (TypeError, ValueError, ArithmeticError, RecursionError, NotImplementedError)
 
 
 class _TooLarge(Exception):
@@ -168,133 +158,7 @@ class _Outcome:
     assumptions: tuple[str, ...] = ()
 
 
-# --- parsing the claim and the givens -------------------------------------------------------------
-
-
-def _label(what: str, text: object) -> str:
-    """How an error names the input it is about: ``claim 'E = x'``, ``given 'I2 = x'``."""
-    shown = text if isinstance(text, str) else type(text).__name__
-    return f"{what} {shown[:40] + '…' if len(shown) > 40 else shown!r}"
-
-
-def _bounded_input(expr: sp.Expr, what: str) -> None:
-    """Refuse what the parser's limits let through by combining: sizes, numbers and exponents.
-
-    Names defined by --given are substituted as parsed, so a few short entries can build a huge
-    tree (each using the previous name many times), a number of millions of digits (``x*x*…``
-    with x = 10^999) or a power of a large exponent (``x*x*…`` with x = θ^100): the same limits
-    as the parser's then apply to the result — at most :data:`MAX_INPUT_NODES` nodes, numbers
-    below 10^1000, exponents p/q with |p|, q ≤ 100.
-    """
-    if tree_size(expr, MAX_INPUT_NODES + 1) > MAX_INPUT_NODES:
-        raise InvalidInputError(f"expected {what} of at most {MAX_INPUT_NODES} nodes once the --given names are "
-                                f"substituted, got more")
-    depth = _nesting(expr)
-    if depth > MAX_INPUT_DEPTH:
-        raise InvalidInputError(f"expected {what} nested at most {MAX_INPUT_DEPTH} deep once the --given names are "
-                                f"substituted, got {depth}")
-    for r in expr.atoms(sp.Rational):
-        if int(r.p).bit_length() > _MAX_BITS or int(r.q).bit_length() > _MAX_BITS:
-            raise InvalidInputError(f"expected numbers below 10^1000 in {what}, got one of "
-                                    f"{max(len(str(abs(r.p))), len(str(r.q)))} digits")
-    for p in expr.atoms(sp.Pow):
-        if isinstance(p.exp, sp.Rational) and (abs(p.exp.p) > MAX_EXPONENT or p.exp.q > MAX_EXPONENT):
-            raise InvalidInputError(f"expected exponents p/q with |p|, q ≤ {MAX_EXPONENT} in {what} once the "
-                                    f"--given names are substituted, got {brief(p.exp, 40)}")
-
-
-def _nesting(expr: sp.Basic) -> int:
-    """The depth of ``expr``'s tree (a leaf is 1), walked without recursion."""
-    deepest, stack = 0, [(expr, 1)]
-    while stack:
-        node, depth = stack.pop()
-        deepest = max(deepest, depth)
-        stack.extend((a, depth + 1) for a in node.args)
-    return deepest
-
-
-def _parse_givens(given: Sequence[str], system: System, rename: dict | None = None) -> tuple[dict, list, list]:
-    """(names for parsing, [(symbol, value)] specialisations, [new names]) from ``name = expression`` texts.
-
-    A specialisation's value has the earlier specialisations substituted (``I2 = I1`` then
-    ``I3 = I2`` makes I3 = I1).  ``rename`` maps symbols to stand-ins used throughout (the
-    assumption-free parameters of :func:`_positivity_used`).  An error names the entry.
-    """
-    rename = rename or {}
-    if isinstance(given, str) or not isinstance(given, Sequence):
-        raise InvalidInputError(f"given: expected a list of 'name = expression' strings, got {_shown(given)}")
-    if len(given) > _MAX_GIVEN:
-        raise InvalidInputError(f"given: expected at most {_MAX_GIVEN} entries, got {len(given)}")
-    names: dict[str, sp.Expr] = {n: rename.get(s, s) for n, s in system.names.items()}
-    specs: list[tuple[sp.Symbol, sp.Expr]] = []
-    new: list[str] = []
-    for text in given:
-        with _naming(_label("given", text)):
-            _parse_given(text, system, rename, names, specs, new)
-    return names, specs, new
-
-
-@contextmanager
-def _naming(label: str) -> Iterator[None]:
-    """An input error inside, prefixed with ``label``; so is an error SymPy raises while building the
-    expression (``atan2(0, log(0))``: "Invalid NaN comparison"), which is the input's, not a bug."""
-    try:
-        yield
-    except InvalidInputError as exc:
-        raise InvalidInputError(f"{label}: {exc}") from None
-    except _SYMPY_ERRORS as exc:
-        what = str(exc).strip().splitlines()[0][:80] if str(exc).strip() else type(exc).__name__
-        raise InvalidInputError(f"{label}: expected an expression SymPy can build, got {type(exc).__name__}: "
-                                f"{what}") from None
-
-
-def _parse_given(text: object, system: System, rename: dict, names: dict, specs: list, new: list) -> None:
-    """One --given entry into ``names`` (a new name) or ``specs`` (a specialisation)."""
-    if not isinstance(text, str) or len(text) > MAX_LENGTH or text.count("=") != 1 or "==" in text:
-        raise InvalidInputError("expected 'name = expression' with one '=' and at most "
-                                f"{MAX_LENGTH} characters, got {_shown(text)}")
-    left, right = (s.strip() for s in text.split("="))
-    if not left.isidentifier() or keyword.iskeyword(left) or not left.isascii():
-        raise InvalidInputError(f"expected 'name = expression' with a plain name on the left, got {left[:60]!r}")
-    if left in FUNCTIONS or left == "pi":
-        raise InvalidInputError(f"expected a name that is not a function or constant, got {left!r}")
-    value = parse_expression(right, names, hints=system.hints, what=f"value of {left}")
-    _bounded_input(value, f"the value of {left}")
-    if left in new:
-        raise InvalidInputError(f"expected each new name defined once, got {left!r} twice")
-    if left not in system.names:
-        names[left] = value
-        new.append(left)
-        return
-    sym = system.names[left]
-    kind = system.kind(sym)
-    if kind not in ("state", "parameter"):
-        what = {"defined": "the defined quantity", "derivative": "the time derivative"}.get(kind, "the symbol")
-        raise InvalidInputError(
-            f"expected a new name or a state variable or parameter to specialise, got {what} "
-            f"{left!r} (fixed by {'its definition' if kind == 'defined' else 'the equations of motion'})")
-    if value.has(dt):
-        raise InvalidInputError(f"expected a value without dt() for {left}, got {right.strip()[:60]!r}")
-    value = _specialise(system.expand_definitions(value).xreplace(rename), specs)
-    _bounded_input(value, f"the value of {left}")
-    sym = rename.get(sym, sym)
-    if value.has(sym):
-        raise InvalidInputError(f"expected the value of {left} not to depend on {left}, got {brief(value)}")
-    if sym.is_positive and value.is_positive is False:
-        raise InvalidInputError(f"expected a positive value for {left}, got {brief(value)}")
-    beyond = sorted(s.name for s in value.free_symbols if system.kind(s) == "derivative")
-    if beyond:
-        raise InvalidInputError(f"expected the value of {left} in the state and the parameters, got {beyond[0]}")
-    specs.append((sym, value))
-
-
-def _parse_claim(claim: object, names: dict, system: System) -> tuple[sp.Expr, sp.Expr]:
-    """(LHS, RHS) of the claim, within the input limits; an error names the claim."""
-    with _naming(_label("claim", claim)):
-        sides = parse_claim(claim, names, hints=system.hints)
-        for side, x in zip(("left", "right"), sides):
-            _bounded_input(x, f"the {side}-hand side")
-    return sides
+# --- expanding -----------------------------------------------------------------------------------
 
 
 def _bounded(expr: sp.Expr, doing: str) -> sp.Expr:
@@ -329,19 +193,13 @@ def _expand(expr: sp.Expr, system: System, *, on_motion: bool, clock: Budget) ->
     return _bounded(system.on_shell(out), "substituting the equations of motion") if on_motion else out
 
 
-def _specialise(expr: sp.Expr, specs: list) -> sp.Expr:
-    for sym, value in specs:
-        expr = expr.xreplace({sym: value})
-    return expr
-
-
 def _sides(lhs: sp.Expr, rhs: sp.Expr, system: System, specs: list, *, on_motion: bool, clock: Budget,
            rename: dict | None = None) -> list[sp.Expr]:
     """Both sides expanded (:func:`_expand`), renamed, then specialised."""
     out = []
     for x in (lhs, rhs):
         e = _expand(x, system, on_motion=on_motion, clock=clock)
-        out.append(_bounded(_specialise(e.xreplace(rename) if rename else e, specs), "substituting --given values"))
+        out.append(_bounded(specialise(e.xreplace(rename) if rename else e, specs), "substituting --given values"))
     return out
 
 
@@ -543,8 +401,8 @@ def _positivity_used(claim: str, given: Sequence[str], system: System, parsed: t
     """
     rename = {s: sp.Symbol(s.name, real=True) for s in system.names.values()
               if system.kind(s) == "parameter" and s.is_positive}
-    names, specs, _ = _parse_givens(given, system, rename)
-    lhs, rhs = _parse_claim(claim, names, system)
+    names, specs, _ = parse_givens(given, system, rename)
+    lhs, rhs = parse_claim_within_limits(claim, names, system)
     lhs0, rhs0, specs0 = parsed
     same = (lhs0.xreplace(rename) == lhs and rhs0.xreplace(rename) == rhs
             and [(rename.get(s, s), v.xreplace(rename)) for s, v in specs0] == specs)
@@ -563,12 +421,6 @@ def _positivity_used(claim: str, given: Sequence[str], system: System, parsed: t
         done, simplified = clock.attempt(lambda: sp.simplify(diff), unbudgeted_ok=False)
         proven = done and simplified == 0
     return [] if done and proven else present
-
-
-def _shown(value: object) -> str:
-    """A short repr of something that is not an expression (for an error message)."""
-    text = repr(value)
-    return text if len(text) <= 60 else text[:59] + "…"
 
 
 def _check_options(points: object, seed: object, budget: object, any_moments: object) -> None:
@@ -595,10 +447,10 @@ def check(claim: str, system: str = "heavy_top", *, given: Sequence[str] = (), p
     parsing, expanding ``dt``, proving, sampling and simplifying all stop when it is spent, and
     the verdict is then ``undecided``, saying in which step (:mod:`.budget`: enforced by an
     interval timer in the main thread, by checks between steps elsewhere).  The one-time
-    derivation of the system's model (about 1 s for the heavy top, once per process) comes
-    before and is not counted.  ``any_moments``: draw the parameters independently (any positive
-    values) instead of only those of a real body (:mod:`.sampling`).  What the answer assumes
-    is in :attr:`Verdict.assumptions`.
+    derivation of the system's definitions that the texts name (up to about 4 s for all of the
+    heavy top's, once per process) comes before and is not counted.  ``any_moments``: draw the
+    parameters independently (any positive values) instead of only those of a real body
+    (:mod:`.sampling`).  What the answer assumes is in :attr:`Verdict.assumptions`.
 
     Input errors raise :class:`~mechderive.errors.InvalidInputError` with a message starting with
     the argument it is about (``claim '…': ``, ``given '…': ``, ``points: `` …); an expression
@@ -612,7 +464,7 @@ def check(claim: str, system: str = "heavy_top", *, given: Sequence[str] = (), p
     except InvalidInputError as exc:
         raise InvalidInputError(f"system: {exc}") from None
     if (isinstance(claim, str) and len(claim) <= MAX_LENGTH and isinstance(given, Sequence)
-            and not isinstance(given, str) and len(given) <= _MAX_GIVEN
+            and not isinstance(given, str) and len(given) <= MAX_GIVEN
             and all(isinstance(g, str) and len(g) <= MAX_LENGTH for g in given)):
         # the system's own derivations that the texts name: a fixed cost, not the claim's
         sys_.prepare(_NAME.findall(" ".join([claim, *given])))
@@ -633,8 +485,8 @@ def check(claim: str, system: str = "heavy_top", *, given: Sequence[str] = (), p
 
 def _check(claim: str, sys_: System, given: Sequence[str], clock: Budget, *, points: int, seed: int,
            any_moments: bool) -> Verdict:
-    names, specs, new = clock.run("parsing the --given entries", lambda: _parse_givens(given, sys_))
-    lhs, rhs = clock.run("parsing the claim", lambda: _parse_claim(claim, names, sys_))
+    names, specs, new = clock.run("parsing the --given entries", lambda: parse_givens(given, sys_))
+    lhs, rhs = clock.run("parsing the claim", lambda: parse_claim_within_limits(claim, names, sys_))
     typed = sum(ch.isdigit() for text in (claim, *given) for ch in text)
     opts = {"points": points, "seed": seed, "hi": _high_precision(typed), "specs": specs, "any_moments": any_moments}
     used = _context([lhs, rhs], sys_, new, specs)
