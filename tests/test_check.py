@@ -263,8 +263,15 @@ def test_hints_for_clashing_names():
 def test_bad_options():
     with pytest.raises(InvalidInputError, match="expected a system among free_top, heavy_top, got 'spinning'"):
         check("E = E", "spinning")
-    with pytest.raises(InvalidInputError, match="expected points between 20 and 1000, got 5"):
+    with pytest.raises(InvalidInputError, match="^points: expected an integer between 20 and 1000, got 5$"):
         check("E = E", HEAVY, points=5)
+    for budget in (0, -1, float("nan"), float("inf"), 601, "5", True):
+        with pytest.raises(InvalidInputError, match="^budget: expected a time of more than 0 and at most 600 s"):
+            check("E = E", HEAVY, budget=budget)
+    with pytest.raises(InvalidInputError, match="^seed: expected an integer, got 1.5$"):
+        check("E = E", HEAVY, seed=1.5)
+    with pytest.raises(InvalidInputError, match="^given: expected a list of 'name = expression' strings"):
+        check("E = E", HEAVY, given="I1 = 1")
 
 
 # --- the command line ------------------------------------------------------------------------------
@@ -411,7 +418,7 @@ def test_proofs_state_the_positivity_they_use():
     "exp(exp(1000)) = exp(exp(1000) + 1e-100)",   # both sides overflow
 ])
 def test_overflow_is_undecided(claim):
-    v = check(claim, budget=0.5)
+    v = check(claim, budget=5)
     assert v.verdict == "undecided" and v.exit_status == 3, v
     assert "overflow" in v.detail and "beyond 10^10000" in v.detail
 
@@ -444,7 +451,7 @@ def _theta(v) -> mpmath.mpf:
     ("exp(exp(10))*(1 + 1e-50) = exp(exp(10))", None),
 ])
 def test_tiny_but_genuine_differences_are_false(claim, difference):
-    v = check(claim, budget=0.5)
+    v = check(claim, budget=5)
     assert v.verdict == "false", v
     if difference is None:
         assert float(v.counterexample["relative difference"]) == pytest.approx(1e-50, rel=1e-4)
@@ -459,14 +466,22 @@ def test_tiny_but_genuine_differences_are_false(claim, difference):
     ("log(sqrt((theta + 1e30)**2) - 1e30) = log(theta)", "numeric"),  # the log of a 30-digit cancellation
 ])
 def test_cancellations_that_hold_are_identities(claim, method):
-    v = check(claim, budget=0.5)
+    v = check(claim, budget=5)
     assert v.verdict == "identity" and v.method == method, v
 
 
 def test_escalation_respects_the_budget():
-    # seeing 1e-100 needs more than the base 60 digits; with no time for more nothing is decided
-    v = check("sin(theta) = sin(theta + 1e-100)", budget=0)
-    assert v.verdict == "undecided" and "needs more digits than the time budget allows" in v.detail
+    import sympy as sp
+
+    from mechderive.formulas.significance import compare
+
+    # with no time left nothing is evaluated, and nothing decided
+    x = sp.Symbol("x", real=True)
+    late = compare(sp.sin(x), sp.sin(x + sp.Rational(1, 10**100)), {x: sp.Rational(7, 5)}, base=60,
+                   deadline=time.monotonic() - 1)
+    assert late.kind == "reject" and late.reason == "the time budget (--budget) was spent before this point"
+    v = check("sin(theta) = sin(theta + 1e-100)", budget=1e-3)  # 1 ms: not even enough to parse
+    assert v.verdict == "undecided" and "the time budget of 0.001 s (--budget) ran out while " in v.detail, v
 
 
 def test_compare_at_one_point():

@@ -50,8 +50,9 @@ def add_parser(sub: "argparse._SubParsersAction") -> None:
     p.add_argument("--points", type=int, default=20, help="random points of the numeric method (≥ 20; default 20)")
     p.add_argument("--seed", type=int, default=20261121, help="seed of the random points")
     p.add_argument("--budget", type=float, default=5.0,
-                   help="seconds allowed for each symbolic simplification and for each numeric step's "
-                   "evaluations beyond 60 digits (default 5)")
+                   help="seconds the whole decision may take, at most 600 (default 5): parsing, expanding dt, "
+                   "proofs, random points and simplification stop when it is spent and the verdict is "
+                   "undecided (the one-time derivation of the system's model, up to ~4 s, comes before)")
     p.add_argument("--any-moments", action="store_true",
                    help="draw the parameters independently (any positive values), not only real bodies")
     p.set_defaults(run=run)
@@ -87,25 +88,42 @@ def _print_verdict(v) -> None:
         print(f"  assumes {a}")
 
 
+# check() names the argument an error is about by its keyword; here it is an option or a positional.
+_OPTIONS = {"given ": "--given ", "points:": "--points:", "seed:": "--seed:", "budget:": "--budget:",
+            "any_moments:": "--any-moments:", "system:": "SYSTEM:"}
+
+
+def _on_the_command_line(message: str) -> str:
+    """``message`` with its leading argument named as on the command line (``--given '…': …``)."""
+    for keyword, option in _OPTIONS.items():
+        if message.startswith(keyword):
+            return option + message[len(keyword):]
+    return message
+
+
 def run(args: argparse.Namespace) -> int:
     from ..formulas import check, get_system
 
     try:
-        system = get_system(args.system)
+        try:
+            system = get_system(args.system)
+        except InvalidInputError as exc:
+            raise InvalidInputError(f"system: {exc}") from None
         if args.symbols:
             _print_symbols(system, args.json)
             if args.claim is None:
                 return 0
         if args.claim is None:
-            raise InvalidInputError("expected a claim like 'dt(E) = 0' (or --symbols), got none")
+            raise InvalidInputError("CLAIM: expected a claim like 'dt(E) = 0' (or --symbols), got none")
         verdict = check(args.claim, args.system, given=args.given, points=args.points, seed=args.seed,
                         budget=args.budget, any_moments=args.any_moments)
     except InvalidInputError as exc:
+        message = _on_the_command_line(str(exc))
         if args.json:
-            json.dump({"verdict": "error", "method": "none", "detail": str(exc)}, sys.stdout, ensure_ascii=False)
+            json.dump({"verdict": "error", "method": "none", "detail": message}, sys.stdout, ensure_ascii=False)
             print()
             return 2
-        raise
+        raise InvalidInputError(message) from None
     if args.json:
         json.dump(verdict.as_dict(), sys.stdout, indent=1, ensure_ascii=False)
         print()

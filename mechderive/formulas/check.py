@@ -51,6 +51,20 @@ the states where that holds, i.e. the value is substituted after the time deriva
 equations of motion (``dt(theta_dot) = 0`` given ``theta_dot = 0`` is still false).
 Specialising a defined quantity, a derivative, or redefining a name is refused.
 
+Limits.  ``budget`` is the wall-clock time of the whole decision (:mod:`.budget`): parsing,
+expanding ``dt``, the trig normal form (given half of the time left, a fifth in the formal pass
+of a claim with derivatives, which is usually decided on a motion), the random points, and
+``sympy.simplify`` (most of what is left) all stop when it is spent; the claim is then
+``undecided``, saying in which step.  Only the system's own derivations, once per process,
+come before it.  In the main thread a timer interrupts any step; elsewhere only checks
+between steps apply, so no proof is attempted there (the verdict comes from the random
+points) and expansions stop at :data:`MAX_UNTIMED_NODES` nodes.  Sizes are bounded too: a side
+growing beyond :data:`MAX_NODES` nodes while ``dt`` is expanded is undecided; --given names
+that build more than :data:`MAX_INPUT_NODES` nodes, numbers beyond 10^1000 or exponents beyond
+100 are refused, as the parser refuses them in a single text.  ``exp(exp(exp(exp(theta)))) = 1``
+is false (at θ ≈ 0.65 the left side is 1.7e352); ``dt(dt(dt(dt(dt(E))))) = 0`` is undecided
+within the budget (its expansion along the motion alone takes about 15 s).
+
 >>> check("p_psi = I3*(psi_dot + cos(theta)*phi_dot)").verdict            # (3.63)
 'identity'
 >>> check("I1*dt(omega1) = (I2 - I3)*omega2*omega3", "free_top").verdict   # (3.33)
@@ -66,10 +80,9 @@ Specialising a defined quantity, a derivative, or redefining a name is refused.
 
 from __future__ import annotations
 
-import keyword
 import math
 import random
-import time
+import re
 from dataclasses import dataclass
 from typing import Any, Sequence
 
@@ -78,19 +91,39 @@ import sympy as sp
 
 from ..core.simplify import is_zero
 from ..errors import InvalidInputError
-from .budget import within
+from .budget import Budget, OutOfTime, timer_usable
 from .evaluate import CannotEvaluate
-from .parse import FUNCTIONS, MAX_LENGTH, dt, parse_claim, parse_expression
+from .inputs import (MAX_GIVEN, MAX_INPUT_DEPTH, MAX_INPUT_NODES, parse_claim_within_limits, parse_givens,
+                     shown as _shown, specialise)
+from .parse import MAX_LENGTH, dt
 from .sampling import Draw, PointSampler, decimal_text
 from .significance import Comparison, compare
-from .systems import System, get_system
+from .size import brief, tree_size
+from .systems import SYSTEMS, System, get_system
 
-__all__ = ["Verdict", "check", "EXIT_STATUS"]
+__all__ = ["Verdict", "check", "EXIT_STATUS", "MAX_NODES", "MAX_UNTIMED_NODES", "MAX_INPUT_NODES",
+           "MAX_INPUT_DEPTH", "MAX_BUDGET"]
 
 #: Exit status of ``mechderive check`` for each verdict (2 is an input error).
 EXIT_STATUS = {"identity": 0, "on-shell": 0, "false": 1, "undecided": 3}
+#: The largest tree (nodes, each use of a shared subexpression counted) a side may grow to while
+#: ``dt`` and the definitions are expanded; beyond it the claim is undecided.  dt⁴(E) along the
+#: heavy top's motion has about 72 000 nodes (1 s); dt⁵(E) has about 800 000 (15 s to build).
+MAX_NODES = 100_000
+#: The same limit where no timer can interrupt a step (outside the main thread: :mod:`.budget`), so that
+#: a single differentiation stays short (about 1 s).
+MAX_UNTIMED_NODES = 10_000
+#: The longest time budget accepted, in seconds.
+MAX_BUDGET = 600
+_SIMPLIFY_SHARE = 0.8  # of the time left: sympy.simplify, the last step of a decision (the rest may qualify it)
+_BACKSTOP = 0.75  # seconds after the budget's end at which any step still running is interrupted
+_QUALIFY = 0.3  # seconds allowed, even once the budget is spent, to find the positivity a proof used
 _DEGREE = 20  # the assumed degree in the false-positive bound
-_MAX_GIVEN = 20
+_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+
+
+class _TooLarge(Exception):
+    """An expansion beyond :data:`MAX_NODES`: the claim is undecided (caught in :func:`check`)."""
 
 
 @dataclass(frozen=True)
@@ -125,90 +158,48 @@ class _Outcome:
     assumptions: tuple[str, ...] = ()
 
 
-# --- parsing the claim and the givens -------------------------------------------------------------
+# --- expanding -----------------------------------------------------------------------------------
 
 
-def _parse_givens(given: Sequence[str], system: System, rename: dict | None = None) -> tuple[dict, list, list]:
-    """(names for parsing, [(symbol, value)] specialisations, [new names]) from ``name = expression`` texts.
+def _bounded(expr: sp.Expr, doing: str) -> sp.Expr:
+    """``expr``, if its tree has at most :data:`MAX_NODES` nodes (:data:`MAX_UNTIMED_NODES` where no timer
+    can interrupt the next step); else :class:`_TooLarge`."""
+    limit = MAX_NODES if timer_usable() else MAX_UNTIMED_NODES
+    if tree_size(expr, limit + 1) > limit:
+        raise _TooLarge(f"{doing} gives an expression of more than {limit} nodes (its tree, each use of a "
+                        "shared subexpression counted): too large to decide here")
+    return expr
 
-    A specialisation's value has the earlier specialisations substituted (``I2 = I1`` then
-    ``I3 = I2`` makes I3 = I1).  ``rename`` maps symbols to stand-ins used throughout (the
-    assumption-free parameters of :func:`_positivity_used`).
+
+def _expand(expr: sp.Expr, system: System, *, on_motion: bool, clock: Budget) -> sp.Expr:
+    """Definitions substituted, dt(...) expanded (formally or along the motion), derivatives on-shell if asked.
+
+    Each dt(...) is bounded: the time budget is checked before it and the size of its result after
+    (:data:`MAX_NODES`), so that the next one never differentiates a runaway expression.
     """
-    rename = rename or {}
-    if isinstance(given, str):
-        raise InvalidInputError(f"expected a list of 'name = expression' strings, got the string {given!r}")
-    if len(given) > _MAX_GIVEN:
-        raise InvalidInputError(f"expected at most {_MAX_GIVEN} --given entries, got {len(given)}")
-    names: dict[str, sp.Expr] = {n: rename.get(s, s) for n, s in system.names.items()}
-    specs: list[tuple[sp.Symbol, sp.Expr]] = []
-    new: list[str] = []
-    for text in given:
-        if not isinstance(text, str) or len(text) > MAX_LENGTH or text.count("=") != 1 or "==" in text:
-            raise InvalidInputError(f"expected --given 'name = expression' with one '=', got {str(text)[:80]!r}")
-        left, right = (s.strip() for s in text.split("="))
-        if not left.isidentifier() or keyword.iskeyword(left) or not left.isascii():
-            raise InvalidInputError(
-                f"expected --given 'name = expression' with a plain name on the left, got {left[:60]!r}")
-        if left in FUNCTIONS or left == "pi":
-            raise InvalidInputError(f"expected a name that is not a function or constant, got {left!r}")
-        value = parse_expression(right, names, hints=system.hints, what=f"value of {left}")
-        if left in new:
-            raise InvalidInputError(f"expected each new name defined once, got {left!r} twice")
-        if left not in system.names:
-            names[left] = value
-            new.append(left)
-            continue
-        sym = system.names[left]
-        kind = system.kind(sym)
-        if kind not in ("state", "parameter"):
-            what = {"defined": "the defined quantity", "derivative": "the time derivative"}.get(kind, "the symbol")
-            raise InvalidInputError(
-                f"expected --given to define a new name or specialise a state variable or parameter, got {what} "
-                f"{left!r} (fixed by {'its definition' if kind == 'defined' else 'the equations of motion'})")
-        if value.has(dt):
-            raise InvalidInputError(f"expected a value without dt() for {left}, got {right.strip()[:60]!r}")
-        value = _specialise(system.expand_definitions(value).xreplace(rename), specs)
-        sym = rename.get(sym, sym)
-        if value.has(sym):
-            raise InvalidInputError(f"expected the value of {left} not to depend on {left}, got {value}")
-        if sym.is_positive and value.is_positive is False:
-            raise InvalidInputError(f"expected a positive value for {left}, got {value}")
-        beyond = sorted(s.name for s in value.free_symbols if system.kind(s) == "derivative")
-        if beyond:
-            raise InvalidInputError(f"expected the value of {left} in the state and the parameters, got {beyond[0]}")
-        specs.append((sym, value))
-    return names, specs, new
-
-
-def _expand(expr: sp.Expr, system: System, *, on_motion: bool) -> sp.Expr:
-    """Definitions substituted, dt(...) expanded (formally or along the motion), derivatives on-shell if asked."""
     derivative = system.motion_dt if on_motion else system.formal_dt
+    doing = "dt(...) along the motion" if on_motion else "dt(...)"
 
     def walk(e: sp.Expr) -> sp.Expr:
         if not e.has(dt):
             return e
         if isinstance(e, dt):
-            return derivative(walk(e.args[0]))
+            inner = walk(e.args[0])
+            clock.check()
+            return _bounded(derivative(inner), doing)
         return e.func(*[walk(a) for a in e.args])
 
-    out = walk(system.expand_definitions(expr))
-    return system.on_shell(out) if on_motion else out
+    out = _bounded(walk(_bounded(system.expand_definitions(expr), "substituting the definitions")), doing)
+    return _bounded(system.on_shell(out), "substituting the equations of motion") if on_motion else out
 
 
-def _specialise(expr: sp.Expr, specs: list) -> sp.Expr:
-    for sym, value in specs:
-        expr = expr.xreplace({sym: value})
-    return expr
-
-
-def _sides(lhs: sp.Expr, rhs: sp.Expr, system: System, specs: list, *, on_motion: bool,
+def _sides(lhs: sp.Expr, rhs: sp.Expr, system: System, specs: list, *, on_motion: bool, clock: Budget,
            rename: dict | None = None) -> list[sp.Expr]:
     """Both sides expanded (:func:`_expand`), renamed, then specialised."""
     out = []
     for x in (lhs, rhs):
-        e = _expand(x, system, on_motion=on_motion)
-        out.append(_specialise(e.xreplace(rename) if rename else e, specs))
+        e = _expand(x, system, on_motion=on_motion, clock=clock)
+        out.append(_bounded(specialise(e.xreplace(rename) if rename else e, specs), "substituting --given values"))
     return out
 
 
@@ -260,26 +251,29 @@ def _counterexample(result: Comparison, draw: Draw) -> dict:
 
 
 def _sample(lhs: sp.Expr, rhs: sp.Expr, system: System, points: int, seed: int, hi: int, *, specs: list,
-            any_moments: bool, budget: float) -> dict:
+            any_moments: bool, clock: Budget) -> dict:
     """Compare both sides at seeded random points (:func:`.significance.compare`).
 
-    Returns the agreements, the rejections by reason, or a counterexample.  Evaluations beyond
-    ``hi`` digits share a time budget of ``budget`` seconds.
+    Returns the agreements, the rejections by reason, or a counterexample.  Every evaluation
+    counts against the time budget; :class:`~.budget.OutOfTime` once it is spent.
     """
     syms = sorted(lhs.free_symbols | rhs.free_symbols, key=sp.default_sort_key)
     sampler = PointSampler(system, syms, specs, any_moments=any_moments)
     rng = random.Random(seed)
     needed = points if syms else 1
-    deadline = time.monotonic() + budget
+    where = " among real bodies" if sampler.active and not any_moments else ""
     agreed, rejected, attempts, digits, agreed_to = 0, {}, 0, [], []
     while agreed < needed and attempts < 10 * needed:
+        clock.doing = (f"comparing both sides at random points{where} ({agreed} of {needed} agreed, "
+                       f"{attempts - agreed} rejected so far)")
+        clock.check()
         attempts += 1
         draw = sampler.draw(rng)
         if draw.refusal is not None:
             rejected[draw.refusal] = rejected.get(draw.refusal, 0) + 1
             continue
         try:
-            result = compare(lhs, rhs, draw.point, base=hi, deadline=deadline)
+            result = compare(lhs, rhs, draw.point, base=hi, deadline=clock.end)
         except CannotEvaluate as exc:
             return {"error": str(exc), "condition": sampler.condition}
         if result.kind == "differ":
@@ -291,6 +285,7 @@ def _sample(lhs: sp.Expr, rhs: sp.Expr, system: System, points: int, seed: int, 
         agreed += 1
         digits.append(result.digits)
         agreed_to.append(result.agreed_to)
+    clock.check()  # a last rejection may have been the budget's end
     widths = sampler.widths()
     return {"agreed": agreed, "needed": needed, "rejected": rejected, "attempts": attempts,
             "width": min(widths) if widths else 1.0, "symbols": syms, "condition": sampler.condition,
@@ -316,20 +311,28 @@ def _digits_text(span: tuple[int, int] | None) -> str:
     return f"{low} digits" if low == high else f"{low}-{high} digits"
 
 
-def _decide(lhs: sp.Expr, rhs: sp.Expr, system: System, *, points: int, seed: int, budget: float,
-            hi: int, specs: list, any_moments: bool) -> _Outcome:
+def _decide(lhs: sp.Expr, rhs: sp.Expr, system: System, *, clock: Budget, proof_share: float, points: int,
+            seed: int, hi: int, specs: list, any_moments: bool) -> _Outcome:
+    """Whether LHS − RHS ≡ 0: the trig normal form (``proof_share`` of the time left), random points,
+    then ``sympy.simplify`` with what is left (see the module docstring)."""
     diff = lhs - rhs
     if diff == 0:
         return _Outcome("zero", "exact", "proven: both sides are the same expression")
     if diff.has(sp.zoo, sp.nan, sp.oo, -sp.oo):
-        return _Outcome("unknown", "none", f"singular: LHS − RHS = {str(diff)[:80]} (division by zero)")
-    done, exact = (within(lambda: is_zero(diff), budget, unbudgeted_ok=sp.count_ops(diff) < 400)
-                   if _trig_expandable(diff) else (False, None))
-    exact = exact if done else None
+        return _Outcome("unknown", "none", f"singular: LHS − RHS = {brief(diff, 80)} (division by zero)")
+    # Proofs run only under a timer: even a small expression can expand without end (cosh(cosh(… of a sum).
+    clock.doing = "proving LHS − RHS = 0 in the trig normal form"
+    exact = None
+    if _trig_expandable(diff):
+        done, exact = clock.attempt(lambda: is_zero(diff), proof_share, unbudgeted_ok=False)
+        exact = exact if done else None
     if exact:
         return _Outcome("zero", "exact", "proven: LHS − RHS reduces to 0 modulo sin² + cos² = 1 (trig normal form)")
-    proven_nonzero = exact is False and _trig_args_are_symbols(diff)
-    sample = _sample(lhs, rhs, system, points, seed, hi, specs=specs, any_moments=any_moments, budget=budget)
+    proven_nonzero = exact is False and clock.attempt(lambda: _trig_args_are_symbols(diff), proof_share,
+                                                      unbudgeted_ok=False) == (True, True)
+    sample = clock.run("comparing both sides at random points",
+                       lambda: _sample(lhs, rhs, system, points, seed, hi, specs=specs, any_moments=any_moments,
+                                       clock=clock))
     region = (sample["condition"],) if sample.get("condition") else ()
     where = "" if not region or any_moments else " among real bodies"
     if "error" in sample:
@@ -346,7 +349,8 @@ def _decide(lhs: sp.Expr, rhs: sp.Expr, system: System, *, points: int, seed: in
         reasons = "; ".join(f"{n}× {r}" for r, n in sorted(sample["rejected"].items(), key=lambda x: -x[1])[:3])
         return _Outcome("unknown", "none", f"only {sample['agreed']} of {sample['attempts']} random points{where} "
                         f"gave trustworthy real values ({reasons})", assumptions=region)
-    done, simplified = within(lambda: sp.simplify(diff), budget, unbudgeted_ok=False)
+    clock.doing = "simplifying LHS − RHS"
+    done, simplified = clock.attempt(lambda: sp.simplify(diff), _SIMPLIFY_SHARE, unbudgeted_ok=False)
     if done and simplified == 0:
         return _Outcome("zero", "simplify",
                         f"proven: sympy.simplify(LHS − RHS) = 0 (and it agreed numerically at {points} points)")
@@ -378,8 +382,14 @@ def _context(exprs: Sequence[sp.Expr], system: System, new: list[str], specs: li
     return "".join("; " + p for p in parts)
 
 
+def _positive_parameters(system: System, exprs: Sequence[sp.Expr]) -> list[str]:
+    """The positive parameters of ``system`` that occur in ``exprs``, by name."""
+    return sorted({s.name for e in exprs for s in e.free_symbols
+                   if system.kind(s) == "parameter" and s.is_positive})
+
+
 def _positivity_used(claim: str, given: Sequence[str], system: System, parsed: tuple, *, on_motion: bool,
-                     method: str, budget: float) -> list[str]:
+                     method: str, clock: Budget) -> list[str]:
     """The positive parameters a proof relied on being positive: [] if it holds for any real values.
 
     The claim is parsed again with the parameters replaced by merely real stand-ins.  If that
@@ -391,26 +401,40 @@ def _positivity_used(claim: str, given: Sequence[str], system: System, parsed: t
     """
     rename = {s: sp.Symbol(s.name, real=True) for s in system.names.values()
               if system.kind(s) == "parameter" and s.is_positive}
-    names, specs, _ = _parse_givens(given, system, rename)
-    lhs, rhs = parse_claim(claim, names, hints=system.hints)
+    names, specs, _ = parse_givens(given, system, rename)
+    lhs, rhs = parse_claim_within_limits(claim, names, system)
     lhs0, rhs0, specs0 = parsed
     same = (lhs0.xreplace(rename) == lhs and rhs0.xreplace(rename) == rhs
             and [(rename.get(s, s), v.xreplace(rename)) for s, v in specs0] == specs)
     if same and method == "exact":
         return []
-    left, right = _sides(lhs, rhs, system, specs, on_motion=on_motion, rename=rename)
+    left, right = _sides(lhs, rhs, system, specs, on_motion=on_motion, clock=clock, rename=rename)
     stand_ins = set(rename.values())
     present = sorted({s.name for s in left.free_symbols | right.free_symbols if s in stand_ins})
     diff = left - right
     if not present or diff == 0:
         return []
     if method == "exact":
-        done, proven = within(lambda: is_zero(diff), budget, unbudgeted_ok=sp.count_ops(diff) < 400
-                              ) if _trig_expandable(diff) else (False, None)
+        done, proven = (clock.attempt(lambda: is_zero(diff), unbudgeted_ok=False) if _trig_expandable(diff)
+                        else (False, None))
     else:
-        done, simplified = within(lambda: sp.simplify(diff), budget, unbudgeted_ok=False)
+        done, simplified = clock.attempt(lambda: sp.simplify(diff), unbudgeted_ok=False)
         proven = done and simplified == 0
     return [] if done and proven else present
+
+
+def _check_options(points: object, seed: object, budget: object, any_moments: object) -> None:
+    """Refuse option values out of range, naming the option."""
+    if not isinstance(points, int) or isinstance(points, bool) or not 20 <= points <= 1000:
+        raise InvalidInputError(f"points: expected an integer between 20 and 1000, got {_shown(points)}")
+    if not isinstance(seed, int) or isinstance(seed, bool):
+        raise InvalidInputError(f"seed: expected an integer, got {_shown(seed)}")
+    if (not isinstance(budget, (int, float)) or isinstance(budget, bool) or not math.isfinite(budget)
+            or not 0 < budget <= MAX_BUDGET):
+        raise InvalidInputError(f"budget: expected a time of more than 0 and at most {MAX_BUDGET} seconds, "
+                                f"got {_shown(budget)}")
+    if not isinstance(any_moments, bool):
+        raise InvalidInputError(f"any_moments: expected True or False, got {_shown(any_moments)}")
 
 
 def check(claim: str, system: str = "heavy_top", *, given: Sequence[str] = (), points: int = 20,
@@ -418,52 +442,92 @@ def check(claim: str, system: str = "heavy_top", *, given: Sequence[str] = (), p
     """Decide ``claim`` ("LHS = RHS") for ``system`` ("heavy_top" or "free_top"); see the module docstring.
 
     ``given``: "name = expression" entries (new names or specialisations); ``points``: random
-    points of the numeric method (≥ 20); ``seed``: their seed; ``budget``: seconds allowed for
-    each symbolic step (is_zero, sympy.simplify) and, in each numeric step, for all the
-    evaluations beyond the base precision (60 digits, more for long typed numbers);
-    ``any_moments``: draw the parameters independently (any positive values) instead of only
-    those of a real body (:mod:`.sampling`).  What the answer assumes is in
-    :attr:`Verdict.assumptions`.  Input errors raise :class:`~mechderive.errors.InvalidInputError`.
+    points of the numeric method (20 to 1000); ``seed``: their seed; ``budget``: the seconds of
+    wall-clock time the whole decision may take (more than 0, at most :data:`MAX_BUDGET`):
+    parsing, expanding ``dt``, proving, sampling and simplifying all stop when it is spent, and
+    the verdict is then ``undecided``, saying in which step (:mod:`.budget`: enforced by an
+    interval timer in the main thread, by checks between steps elsewhere).  The one-time
+    derivation of the system's definitions that the texts name (up to about 4 s for all of the
+    heavy top's, once per process) comes before and is not counted.  ``any_moments``: draw the
+    parameters independently (any positive values) instead of only those of a real body
+    (:mod:`.sampling`).  What the answer assumes is in :attr:`Verdict.assumptions`.
+
+    Input errors raise :class:`~mechderive.errors.InvalidInputError` with a message starting with
+    the argument it is about (``claim '…': ``, ``given '…': ``, ``points: `` …); an expression
+    that grows beyond :data:`MAX_NODES` nodes while being expanded is ``undecided``.
     """
-    if not isinstance(points, int) or isinstance(points, bool) or not 20 <= points <= 1000:
-        raise InvalidInputError(f"expected points between 20 and 1000, got {points!r}")
-    if not isinstance(budget, (int, float)) or not 0 <= budget <= 600:
-        raise InvalidInputError(f"expected a time budget between 0 and 600 seconds, got {budget!r}")
-    if not isinstance(any_moments, bool):
-        raise InvalidInputError(f"expected any_moments to be True or False, got {any_moments!r}")
-    sys_ = get_system(system)
-    names, specs, new = _parse_givens(given, sys_)
-    lhs, rhs = parse_claim(claim, names, hints=sys_.hints)
+    _check_options(points, seed, budget, any_moments)
+    if not isinstance(system, str):
+        raise InvalidInputError(f"system: expected a name among {', '.join(sorted(SYSTEMS))}, got {_shown(system)}")
+    try:
+        sys_ = get_system(system)
+    except InvalidInputError as exc:
+        raise InvalidInputError(f"system: {exc}") from None
+    if (isinstance(claim, str) and len(claim) <= MAX_LENGTH and isinstance(given, Sequence)
+            and not isinstance(given, str) and len(given) <= MAX_GIVEN
+            and all(isinstance(g, str) and len(g) <= MAX_LENGTH for g in given)):
+        # the system's own derivations that the texts name: a fixed cost, not the claim's
+        sys_.prepare(_NAME.findall(" ".join([claim, *given])))
+    clock = Budget(budget)
+    try:
+        with clock.backstop(_BACKSTOP):
+            return _check(claim, sys_, given, clock, points=points, seed=seed, any_moments=any_moments)
+    except OutOfTime as exc:
+        if not clock.spent(exc):
+            raise
+        return Verdict("undecided", "none", f"the time budget of {budget:g} s (--budget) ran out while {clock.doing}")
+    except _TooLarge as exc:
+        return Verdict("undecided", "none", str(exc))
+    except RecursionError:  # (a safety net: the input's nesting is bounded, an expansion's may still grow)
+        return Verdict("undecided", "none", f"the expression is nested too deeply for SymPy's recursive algorithms "
+                       f"while {clock.doing}")
+
+
+def _check(claim: str, sys_: System, given: Sequence[str], clock: Budget, *, points: int, seed: int,
+           any_moments: bool) -> Verdict:
+    names, specs, new = clock.run("parsing the --given entries", lambda: parse_givens(given, sys_))
+    lhs, rhs = clock.run("parsing the claim", lambda: parse_claim_within_limits(claim, names, sys_))
     typed = sum(ch.isdigit() for text in (claim, *given) for ch in text)
-    opts = {"points": points, "seed": seed, "budget": budget, "hi": _high_precision(typed), "specs": specs,
-            "any_moments": any_moments}
+    opts = {"points": points, "seed": seed, "hi": _high_precision(typed), "specs": specs, "any_moments": any_moments}
     used = _context([lhs, rhs], sys_, new, specs)
 
-    def verdict(name: str, outcome: _Outcome, detail: str, *, on_motion: bool) -> Verdict:
+    def verdict(name: str, outcome: _Outcome, detail: str, *, sides: Sequence[sp.Expr], on_motion: bool) -> Verdict:
         assumptions = list(outcome.assumptions)
         if outcome.kind == "zero" and outcome.method in ("exact", "simplify"):
-            positive = _positivity_used(claim, given, sys_, (lhs, rhs, specs), on_motion=on_motion,
-                                        method=outcome.method, budget=budget)
+            present = _positive_parameters(sys_, sides)
+            positive = present
+            if present:  # a little time beyond a spent budget: the verdict is decided, this only qualifies it
+                clock.doing = "finding whether the proof used the parameters' positivity"
+                qualify = Budget(max(clock.left(), _QUALIFY))
+                done, used_ = qualify.attempt(lambda: _positivity_used(claim, given, sys_, (lhs, rhs, specs),
+                                                                       on_motion=on_motion, method=outcome.method,
+                                                                       clock=qualify), unbudgeted_ok=True)
+                positive = used_ if done else present
             if positive:
                 assumptions.append(f"{', '.join(positive)} > 0: the proof uses the parameters' positivity")
         example = _with_given(outcome.counterexample, specs)
         return Verdict(name, outcome.method, detail, example, tuple(assumptions))
 
-    formal = _sides(lhs, rhs, sys_, specs, on_motion=False)
-    off = _decide(*formal, sys_, **opts)
-    if off.kind == "zero":
-        return verdict("identity", off, off.detail + used, on_motion=False)
+    formal = clock.run("substituting the definitions and expanding dt(...)",
+                       lambda: _sides(lhs, rhs, sys_, specs, on_motion=False, clock=clock))
     has_derivatives = any(sys_.kind(s) == "derivative" for e in formal for s in e.free_symbols)
+    # a claim with derivatives is usually decided on a motion: the formal proof gets less of the time
+    off = _decide(*formal, sys_, clock=clock, proof_share=0.2 if has_derivatives else 0.5, **opts)
+    if off.kind == "zero":
+        return verdict("identity", off, off.detail + used, sides=formal, on_motion=False)
     if not has_derivatives:
-        return verdict("false" if off.kind == "nonzero" else "undecided", off, off.detail + used, on_motion=False)
-    on = _sides(lhs, rhs, sys_, specs, on_motion=True)
+        return verdict("false" if off.kind == "nonzero" else "undecided", off, off.detail + used, sides=formal,
+                       on_motion=False)
+    on = clock.run("expanding dt(...) along the motion (the equations of motion substituted)",
+                   lambda: _sides(lhs, rhs, sys_, specs, on_motion=True, clock=clock))
     motion = {"heavy_top": "θ̈, φ̈, ψ̈ from the Euler–Lagrange equations of L = T − V",
               "free_top": "ω̇ from Euler's equations (3.33) without torque"}[sys_.name]
-    result = _decide(*on, sys_, **opts)
+    result = _decide(*on, sys_, clock=clock, proof_share=0.5, **opts)
     where = f"; on a motion: {motion}{used}"
     if result.kind == "zero":
-        return verdict("on-shell", result, result.detail + where + "; not an identity off the motion", on_motion=True)
-    return verdict("false" if result.kind == "nonzero" else "undecided", result, result.detail + where,
+        return verdict("on-shell", result, result.detail + where + "; not an identity off the motion", sides=on,
+                       on_motion=True)
+    return verdict("false" if result.kind == "nonzero" else "undecided", result, result.detail + where, sides=on,
                    on_motion=True)
 
 

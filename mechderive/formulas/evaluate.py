@@ -53,6 +53,8 @@ from typing import Mapping
 import mpmath
 import sympy as sp
 
+from .size import brief
+
 __all__ = ["evaluate", "evaluate_terms", "Terms", "PointRejected", "Unresolved", "CannotEvaluate",
            "MAX_DECADES"]
 
@@ -254,7 +256,7 @@ class _Evaluator:
         if node.exp.is_Rational:
             n = node.exp
             if n.is_Integer and n >= 0:
-                k = int(n)  # k ≤ 100 (the parser's limit): b^k is cheap even for |b| near 10^10000
+                k = int(n)  # b^k by repeated squaring: cheap for any k (the result's size is checked after)
                 v = b ** k
                 return v, (k * abs(b) ** (k - 1) * eb if k else 0) + eps * abs(v) * (1 + k.bit_length()), sb ** k
             if b == 0:
@@ -287,8 +289,7 @@ class _Evaluator:
 
 
 def _short(node: sp.Basic, limit: int = 60) -> str:
-    text = str(node)
-    return text if len(text) <= limit else text[: limit - 1] + "…"
+    return brief(node, limit)  # not str(): an expanded dt(...) may be a tree of 10^5 nodes
 
 
 def evaluate_terms(expr: sp.Basic, point: Mapping[sp.Symbol, sp.Rational], *, dps: int) -> Terms:

@@ -18,13 +18,16 @@ from __future__ import annotations
 import random
 from dataclasses import dataclass
 
+import mpmath
 import sympy as sp
 
+from .evaluate import CannotEvaluate, PointRejected, evaluate
 from .systems import System
 
 __all__ = ["PointSampler", "Draw", "decimal_text"]
 
 _GIVEN_REFUSED = "the --given values make a body the solvers refuse"
+_GIVEN_DIGITS = 20
 
 
 def decimal_text(r: sp.Rational) -> str:
@@ -97,16 +100,23 @@ class PointSampler:
                 point[s] = sp.Rational(f"{rng.uniform(low, high):.4f}")
         if self._region is None:
             return Draw(point)
-        values = {n: sp.Rational(v.numerator, v.denominator) for n, v in body.items()}
+        values: dict = {n: sp.Rational(v.numerator, v.denominator) for n, v in body.items()}
         drawn = {**{s: values[n] for s, n in self._params.items()}, **point}
         for sym, value in self._specs:
-            given = value.xreplace(drawn)
-            given = given if given.is_Rational else sp.N(given, 20)
-            if not (given.is_real and given.is_finite):
-                return Draw(point, refusal=_GIVEN_REFUSED)
-            values[self._params[sym]] = given
-        if self._region.refusal({n: float(v) for n, v in values.items()}) is not None:
+            if value.is_Rational:
+                values[self._params[sym]] = value
+                continue
+            try:  # the evaluator, not sp.N: it refuses overflow (exp(exp(exp(I1)))) instead of computing it
+                values[self._params[sym]] = evaluate(value, drawn, dps=_GIVEN_DIGITS)[0]
+            except (PointRejected, CannotEvaluate) as exc:
+                return Draw(point, refusal=f"{_GIVEN_REFUSED} ({exc})")
+        if self._region.refusal({n: _as_float(v) for n, v in values.items()}) is not None:
             return Draw(point, refusal=_GIVEN_REFUSED)
-        shown = {n: decimal_text(v) if isinstance(v, sp.Rational) else str(sp.Float(v, 10))
-                 for n, v in values.items()}
+        shown = {n: decimal_text(v) if isinstance(v, sp.Rational) else mpmath.nstr(v, 10) for n, v in values.items()}
         return Draw(point, body=shown)
+
+
+def _as_float(v) -> float:
+    """A float for the solvers' validators: ±inf beyond the double range (they refuse it, with a message)."""
+    with mpmath.workdps(20):
+        return float(mpmath.mpf(int(v.p)) / int(v.q) if isinstance(v, sp.Rational) else v)

@@ -39,7 +39,7 @@ from typing import Mapping
 import mpmath
 import sympy as sp
 
-from .budget import within
+from .budget import run_until
 from .evaluate import PointRejected, Unresolved, evaluate_terms
 
 __all__ = ["compare", "Comparison", "MAX_DIGITS", "SCREEN_DIGITS"]
@@ -134,19 +134,19 @@ def compare(lhs: sp.Expr, rhs: sp.Expr, point: Mapping[sp.Symbol, sp.Rational], 
     """Decide LHS − RHS at ``point`` (exact rationals): see the module docstring.
 
     ``base``: the fewest digits an agreement is accepted at; ``cap``: the most digits used;
-    ``deadline``: a :func:`time.monotonic` instant after which no evaluation beyond ``base``
-    digits starts (and one running is interrupted, in the main thread).
+    ``deadline``: a :func:`time.monotonic` instant after which no evaluation starts (and one
+    running is interrupted, in the main thread: :mod:`.budget`); the point is then rejected.
     :class:`~.evaluate.CannotEvaluate` propagates.
     """
     def once(digits: int) -> _Difference:
-        if digits <= base or deadline is None:
+        if deadline is None:
             return _difference(lhs, rhs, point, digits)
-        left = deadline - time.monotonic()
-        if left <= 0:
-            raise _Rejected("needs more digits than the time budget allows (--budget)")
-        done, out = within(lambda: _difference(lhs, rhs, point, digits), left, unbudgeted_ok=True)
+        if deadline <= time.monotonic():  # (the same reason at every point, so that the reasons add up)
+            raise _Rejected("needs more digits than the time budget allows (--budget)" if digits > SCREEN_DIGITS
+                            else "the time budget (--budget) was spent before this point")
+        done, out = run_until(lambda: _difference(lhs, rhs, point, digits), deadline, unbudgeted_ok=True)
         if not done:
-            raise _Rejected(f"the {digits}-digit evaluation exceeded the time budget")
+            raise _Rejected("an evaluation exceeded the time budget (--budget)")
         return out
 
     def at(digits: int, ceiling: int = cap) -> _Difference:

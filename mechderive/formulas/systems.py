@@ -41,7 +41,7 @@ import math
 import random
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Callable, Mapping
+from typing import Callable, Iterable, Mapping
 
 import sympy as sp
 
@@ -116,6 +116,7 @@ class System:
 
     def __post_init__(self) -> None:
         self.names = {q.name: q.symbol for q in self.quantities}
+        self.quantities_by_name = {q.name: q for q in self.quantities}
         self._by_symbol = {q.symbol: q for q in self.quantities}
         self._parent: dict[sp.Symbol, sp.Symbol] = {}
         self._child: dict[sp.Symbol, sp.Symbol] = {}
@@ -175,7 +176,10 @@ class System:
             return None
         base = next(b for b in self.coordinates if sym == state_symbol(_jet_name(b, k)))
         nxt = state_symbol(_jet_name(base, k + 1))
-        self._child[sym], self._parent[nxt], self._order_of[nxt] = nxt, sym, k + 1
+        # _child last: it marks the entry complete, so an interruption in between (a time budget's
+        # alarm) leaves a state that the next call completes
+        self._parent[nxt], self._order_of[nxt] = sym, k + 1
+        self._child[sym] = nxt
         return nxt
 
     def formal_dt(self, expr: sp.Expr) -> sp.Expr:
@@ -235,6 +239,22 @@ class System:
         """``expr`` with every defined symbol replaced by its definition."""
         subs = {s: self.definition(s) for s in expr.free_symbols if self.kind(s) == "defined"}
         return expr.xreplace(subs) if subs else expr
+
+    def prepare(self, names: Iterable[str]) -> None:
+        """Derive now the definitions of the ``names`` that are defined quantities, and the flow of the
+        equations of motion if any name is ``dt`` or a derivative beyond the state: the system's own
+        fixed cost (up to about 4 s for all of the heavy top's, once per process), kept out of a
+        claim's time budget."""
+        names = set(names)
+        for q in self.quantities:
+            if q.kind == "defined" and q.name in names:
+                self.definition(q.symbol)
+        if "dt" in names or any(self.quantities_by_name[n].kind == "derivative" for n in names
+                                if n in self.quantities_by_name):
+            self.flow
+            for s in self.state:
+                if self._order(s) == self.order - 1:
+                    self._on_shell_value(self.next_derivative(s))
 
     def describe(self) -> list[tuple[str, str, str]]:
         """(name, kind, meaning) of every symbol, in the listing order."""
