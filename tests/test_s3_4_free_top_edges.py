@@ -324,3 +324,25 @@ def test_times_beyond_the_exact_phase_count_are_refused():
     with pytest.raises(MechDeriveError, match=r"expected \|t\| <= .* got t = 1e\+300"):
         sol.omega([0.0, 1e300])
     assert ulp(1.0) == EPS
+
+
+@pytest.mark.parametrize("span, samples", [(1e-300, 101), (1e-17, 1001), (1e-6, 20001)])
+def test_euler_angles_of_very_short_or_dense_runs(span, samples):
+    # Regression (issue 12): with samples closer than R's rounding can tell apart (a run of 1e-300 s from
+    # the pole, R0 = 1, never returned), the tracker refined the noise of R for ever; such samples now
+    # continue the last tracked point's half-angle arguments.  Reference: over less than 1e-5 rad of
+    # turning no angle can wrap, so the angles read off R(t) directly (euler_angles_from_matrix) are the
+    # continuous ones; away from the poles (θ0 = 0.5) they are conditioned to ~ε/sin θ: 64 ε.
+    from mechderive.kinematics.rotations import euler_angles_from_matrix
+
+    t = np.linspace(0.0, span, samples)
+    sol = exact_free_top((1.0, 2.0, 3.0), (1.0, 0.5, 1.0), R0=rotation_matrix(0.3, 0.5, -0.2))
+    angles = sol.euler_angles(t)
+    direct = euler_angles_from_matrix(sol.rotation(t))
+    assert np.max(np.abs(angles - direct)) <= 64 * EPS
+    assert sol.error_estimate(t, ["euler_angles"]) <= 1e-12
+    # from the pole (R0 = 1) only φ + ψ is defined while θ ~ |ω| t: it stays 0 to the rounding of R
+    # (R(t) is right to a few ε absolutely, not relative to a turn of 1e-300: θ reads up to ~1e-16)
+    pole = exact_free_top((1.0, 2.0, 3.0), (1.0, 0.5, 1.0)).euler_angles(t)
+    assert np.all(np.isfinite(pole)) and np.max(pole[:, 1]) <= 2 * span + 64 * EPS
+    assert np.max(np.abs(np.remainder(pole[:, 0] + pole[:, 2] + np.pi, 2 * np.pi) - np.pi)) <= 2 * span + 8 * EPS

@@ -59,8 +59,8 @@ from ..core.model import derivation_log, derivation_seconds
 from ..errors import InvalidInputError, MechDeriveError
 from ..systems.heavy_top import parameters as heavy_top_parameters
 from .schema import Scene, waived
-from .units import (MAX_INTEGRATED_RADIANS, OUTPUT_KEYS, Scaled, check_invariants, check_samples, in_scene_units,
-                    keys_text, scale_scene)
+from .units import (MAX_INTEGRATED_RADIANS, MAX_INTEGRATED_RADIANS_SCIPY, OUTPUT_KEYS, Scaled, check_invariants,
+                    check_samples, in_scene_units, keys_text, scale_scene)
 
 __all__ = ["RunResult", "run_scene"]
 
@@ -282,17 +282,22 @@ def _heavy_rate_bound(scene: Scene) -> float:
 
 
 def _check_integration_length(scene: Scene, rate: float, scaled: Scaled) -> None:
-    """Refuse, naming t_end, an integration longer than :data:`MAX_INTEGRATED_RADIANS` of the fastest rate."""
-    if rate * scene.t_end > MAX_INTEGRATED_RADIANS:
+    """Refuse, naming t_end, an integration longer than :data:`~.units.MAX_INTEGRATED_RADIANS` of the fastest
+    rate (:data:`~.units.MAX_INTEGRATED_RADIANS_SCIPY` without the compiled stepper): ~10 s of work."""
+    from ..core.cbuild import c_enabled
+
+    budget, stepper = ((MAX_INTEGRATED_RADIANS, "") if c_enabled() else
+                       (MAX_INTEGRATED_RADIANS_SCIPY, " on SciPy's stepper (no C compiler)"))
+    if rate * scene.t_end > budget:
         if not math.isfinite(rate):
             raise InvalidInputError(
                 f"{OUTPUT_KEYS[scaled.original.system]}: expected a motion whose fastest rate is a double for "
                 f"method 'integrate', got moments and rates whose Euler equations turn it faster than ~1e308 rad/s")
-        limit = scaled.seconds(MAX_INTEGRATED_RADIANS / rate)
+        limit = scaled.seconds(budget / rate)
         raise InvalidInputError(
-            f"scene key [time].t_end: expected at most {limit:.6g} s for method 'integrate' "
-            f"({MAX_INTEGRATED_RADIANS:.6g} rad at this motion's fastest rate, "
-            f"{float(np.ldexp(rate, scaled.rate)):.6g} rad/s: a longer run takes more than ~10^7 steps), "
+            f"scene key [time].t_end: expected at most {limit:.6g} s for method 'integrate'{stepper} "
+            f"({budget:.6g} rad at this motion's fastest rate, "
+            f"{float(np.ldexp(rate, scaled.rate)):.6g} rad/s: a longer run takes more than ~10 s), "
             f"got {scaled.original.t_end!r}")
 
 

@@ -44,15 +44,17 @@ from ..systems.heavy_top import parameters as heavy_top_parameters
 from .schema import Scene
 
 __all__ = ["Scaled", "scale_scene", "check_samples", "check_invariants", "in_scene_units", "keys_text",
-           "MAX_INTEGRATED_RADIANS", "DOUBLE_MAX", "OUTPUT_KEYS"]
+           "MAX_INTEGRATED_RADIANS", "MAX_INTEGRATED_RADIANS_SCIPY", "DOUBLE_MAX", "OUTPUT_KEYS"]
 
 DOUBLE_MAX = 1.7976931348623157e308
 #: Scales within 2^±64 of one are solved as given (no conversion, so ordinary scenes are unchanged).
 _COMFORTABLE = 64
 #: The longest integration a scene may ask for, in radians of the motion's fastest rate: the
-#: compiled DOP853 takes 50-600 right-hand sides per radian of a spinning top (measured: 6·10⁶ for
-#: 10⁴ rad of a top at ψ̇ = 10³ rad/s, rtol 1e-9, about 6 s), so 2^14 rad is ~10 s of work at most.
+#: compiled DOP853 takes 60-600 right-hand sides per radian of a spinning top (measured: 6·10⁶ for
+#: 10⁴ rad of a top at ψ̇ = 10³ rad/s, 6·10⁷ for 10⁶ rad at ψ̇ = 10⁵, rtol 1e-9, ~1 µs each), so
+#: 2^14 rad is ~10 s of work at most; SciPy's stepper (no C compiler) is ~100× slower per step: 2^11 rad.
 MAX_INTEGRATED_RADIANS = 2.0**14
+MAX_INTEGRATED_RADIANS_SCIPY = 2.0**11
 
 _RATE_KEYS = ("theta_dot", "phi_dot", "psi_dot")
 

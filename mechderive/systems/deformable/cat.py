@@ -389,7 +389,7 @@ def _flip_bend(values: tuple[float, ...], rtol: float, backend: str) -> float:
     p = dict(zip(BODY_PARAMETERS, values))
     raise InvalidInputError(
         f"expected a body whose halves turn it over with a peak bend between {grid[0]:.2f} and {grid[-1]:.2f} rad "
-        f"(the default cat, radius/half_length = {DEFAULTS['radius'] / DEFAULTS['half_length']:.3g}, needs 1.82), "
+        f"(the default cat's, radius/half_length = {DEFAULTS['radius'] / DEFAULTS['half_length']:.3g}, do), "
         f"got `radius`/`half_length` = {p['radius'] / p['half_length']:.3g} (`joint_offset`/`half_length` = "
         f"{p['joint_offset'] / p['half_length']:.3g}): "
         + ("too stout, a bend of 3.00 rad turns it by less than π" if short else
