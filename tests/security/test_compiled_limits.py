@@ -261,42 +261,49 @@ def test_ensembles_name_the_member_that_stops_being_finite():
 # --- the command line ------------------------------------------------------------------------------
 
 @needs_c
-def test_falling_cat_with_a_huge_mass_is_a_one_line_error(tmp_path, capsys):
+def test_falling_cat_with_a_huge_mass_is_solved_fast(tmp_path, capsys):
+    """half_mass = 1e300 used to loop for ever on a NaN first step; the motion is scale-free in the
+    mass (only ratios enter the cat's constraint), so the flip must equal that of half_mass = 1."""
     from mechderive.cli import main
     from mechderive.systems.deformable.cat import _stepper
 
     _stepper()   # built (or loaded) before the clock starts
-    scene = tmp_path / "cat.toml"
-    scene.write_text('system = "falling_cat"\n[parameters]\nhalf_mass = 1e300\n[time]\nt_end = 1.0\nsamples = 201\n'
-                     '[output]\nquantities = ["flip_angle"]\n')
-    out = tmp_path / "cat.csv"
-    start = time.perf_counter()
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")
-        status = main(["run", str(scene), "-o", str(out)])
-    assert time.perf_counter() - start < 3.0      # it used to run for ever
-    err = capsys.readouterr().err
-    assert status == 2
-    assert err.count("\n") == 1 and err.startswith("mechderive: error: "), err
-    # the scene check may name the key first; else the integrator says what went wrong
-    assert "half_mass" in err or "finite at the initial state" in err, err
-    assert not out.exists()
+    text = ('system = "falling_cat"\n[parameters]\nhalf_mass = {m}\n[time]\nt_end = 1.0\nsamples = 201\n'
+            '[output]\nquantities = ["flip_angle"]\n')
+    flips = []
+    for m in ("1.0", "1e300"):
+        scene, out = tmp_path / f"cat{m}.toml", tmp_path / f"cat{m}.csv"
+        scene.write_text(text.format(m=m))
+        start = time.perf_counter()
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            status = main(["run", str(scene), "-o", str(out)])
+        assert time.perf_counter() - start < 3.0      # it used to run for ever
+        assert status == 0, capsys.readouterr().err
+        flips.append(np.loadtxt(out, delimiter=",", skiprows=1)[:, 1])
+    # both runs meet rtol 1e-6-ish estimates of ~1e-9 rad: agreement to 1e-7 rad is a loose, safe bound
+    assert np.all(np.isfinite(flips[1]))
+    assert np.max(np.abs(flips[1] - flips[0])) < 1e-7
 
 
 @needs_c
 @pytest.mark.skipif(sys.platform == "win32", reason="SIGINT to a child process is POSIX")
 def test_ctrl_c_stops_a_long_compiled_integration(tmp_path):
-    short, long = tmp_path / "short.toml", tmp_path / "long.toml"
-    short.write_text(TOP_SCENE.format(psi_dot=1e6, t_end=1e-4))
-    long.write_text(TOP_SCENE.format(psi_dot=1e6, t_end=35.177))   # 10⁷ steps (the limit) take ~20 s
-    out = tmp_path / "long.csv"
-    code = textwrap.dedent(f"""
+    # The solver's API, not a scene: the planner refuses scenes predicted to run too long, and this
+    # test needs a compiled integration that runs for seconds.
+    code = textwrap.dedent("""
         import sys
-        from mechderive.cli import main
+        from mechderive.systems.heavy_top.integrate import integrate_heavy_top
+        params = dict(I1=1.0, I3=0.5, M=0.1, g=10.0, l=1.0)
+        initial = dict(theta=0.5, phi=0.0, psi=0.0, theta_dot=0.0, phi_dot=0.0, psi_dot=1e6)
         # the same run, short: every library loaded (or built) before the clock of the test starts
-        assert main(["run", {str(short)!r}, "-o", {str(tmp_path / "short.csv")!r}]) == 0
+        integrate_heavy_top(params, initial, [0.0, 1e-4], rtol=1e-10, backend="c", estimate_error=False)
         print("ready", flush=True)
-        sys.exit(main(["run", {str(long)!r}, "-o", {str(out)!r}]))
+        try:
+            integrate_heavy_top(params, initial, [0.0, 35.177], rtol=1e-10, backend="c", estimate_error=False)
+        except KeyboardInterrupt:   # raised between two chunks of the compiled run
+            sys.exit(130)
+        sys.exit(0)
     """)
     proc = subprocess.Popen([sys.executable, "-c", code], cwd=ROOT, env={**os.environ, "PYTHONPATH": str(ROOT)},
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
@@ -318,5 +325,3 @@ def test_ctrl_c_stops_a_long_compiled_integration(tmp_path):
     err = proc.stderr.read()
     assert proc.returncode == 130, err
     assert latency < 1.0, latency      # it used to run on for more than 25 s
-    assert err.strip() == "mechderive: interrupted", err
-    assert not out.exists()
