@@ -84,7 +84,7 @@ import math
 import random
 import re
 from dataclasses import dataclass
-from typing import Any, Sequence
+from typing import Any, Callable, Sequence
 
 import mpmath
 import sympy as sp
@@ -93,8 +93,8 @@ from ..core.simplify import is_zero
 from ..errors import InvalidInputError
 from .budget import Budget, OutOfTime, timer_usable
 from .evaluate import CannotEvaluate
-from .inputs import (MAX_GIVEN, MAX_INPUT_DEPTH, MAX_INPUT_NODES, parse_claim_within_limits, parse_givens,
-                     shown as _shown, specialise)
+from .inputs import (MAX_GIVEN, MAX_INPUT_DEPTH, MAX_INPUT_NODES, SYMPY_ERRORS, parse_claim_within_limits,
+                     parse_givens, shown as _shown, specialise, sympy_failure)
 from .parse import MAX_LENGTH, dt
 from .sampling import Draw, PointSampler, decimal_text
 from .significance import Comparison, compare
@@ -311,6 +311,16 @@ def _digits_text(span: tuple[int, int] | None) -> str:
     return f"{low} digits" if low == high else f"{low}-{high} digits"
 
 
+def _quietly(fn: Callable[[], Any]) -> Callable[[], Any]:
+    """``fn`` returning None where SymPy fails on the expression: an optional proof that fails proves nothing."""
+    def attempt() -> Any:
+        try:
+            return fn()
+        except SYMPY_ERRORS:
+            return None
+    return attempt
+
+
 def _decide(lhs: sp.Expr, rhs: sp.Expr, system: System, *, clock: Budget, proof_share: float, points: int,
             seed: int, hi: int, specs: list, any_moments: bool) -> _Outcome:
     """Whether LHS − RHS ≡ 0: the trig normal form (``proof_share`` of the time left), random points,
@@ -324,11 +334,11 @@ def _decide(lhs: sp.Expr, rhs: sp.Expr, system: System, *, clock: Budget, proof_
     clock.doing = "proving LHS − RHS = 0 in the trig normal form"
     exact = None
     if _trig_expandable(diff):
-        done, exact = clock.attempt(lambda: is_zero(diff), proof_share, unbudgeted_ok=False)
+        done, exact = clock.attempt(_quietly(lambda: is_zero(diff)), proof_share, unbudgeted_ok=False)
         exact = exact if done else None
     if exact:
         return _Outcome("zero", "exact", "proven: LHS − RHS reduces to 0 modulo sin² + cos² = 1 (trig normal form)")
-    proven_nonzero = exact is False and clock.attempt(lambda: _trig_args_are_symbols(diff), proof_share,
+    proven_nonzero = exact is False and clock.attempt(_quietly(lambda: _trig_args_are_symbols(diff)), proof_share,
                                                       unbudgeted_ok=False) == (True, True)
     sample = clock.run("comparing both sides at random points",
                        lambda: _sample(lhs, rhs, system, points, seed, hi, specs=specs, any_moments=any_moments,
@@ -350,7 +360,7 @@ def _decide(lhs: sp.Expr, rhs: sp.Expr, system: System, *, clock: Budget, proof_
         return _Outcome("unknown", "none", f"only {sample['agreed']} of {sample['attempts']} random points{where} "
                         f"gave trustworthy real values ({reasons})", assumptions=region)
     clock.doing = "simplifying LHS − RHS"
-    done, simplified = clock.attempt(lambda: sp.simplify(diff), _SIMPLIFY_SHARE, unbudgeted_ok=False)
+    done, simplified = clock.attempt(_quietly(lambda: sp.simplify(diff)), _SIMPLIFY_SHARE, unbudgeted_ok=False)
     if done and simplified == 0:
         return _Outcome("zero", "simplify",
                         f"proven: sympy.simplify(LHS − RHS) = 0 (and it agreed numerically at {points} points)")
@@ -415,10 +425,10 @@ def _positivity_used(claim: str, given: Sequence[str], system: System, parsed: t
     if not present or diff == 0:
         return []
     if method == "exact":
-        done, proven = (clock.attempt(lambda: is_zero(diff), unbudgeted_ok=False) if _trig_expandable(diff)
+        done, proven = (clock.attempt(_quietly(lambda: is_zero(diff)), unbudgeted_ok=False) if _trig_expandable(diff)
                         else (False, None))
     else:
-        done, simplified = clock.attempt(lambda: sp.simplify(diff), unbudgeted_ok=False)
+        done, simplified = clock.attempt(_quietly(lambda: sp.simplify(diff)), unbudgeted_ok=False)
         proven = done and simplified == 0
     return [] if done and proven else present
 
@@ -478,9 +488,10 @@ def check(claim: str, system: str = "heavy_top", *, given: Sequence[str] = (), p
         return Verdict("undecided", "none", f"the time budget of {budget:g} s (--budget) ran out while {clock.doing}")
     except _TooLarge as exc:
         return Verdict("undecided", "none", str(exc))
-    except RecursionError:  # (a safety net: the input's nesting is bounded, an expansion's may still grow)
-        return Verdict("undecided", "none", f"the expression is nested too deeply for SymPy's recursive algorithms "
-                       f"while {clock.doing}")
+    except InvalidInputError:
+        raise
+    except SYMPY_ERRORS as exc:  # SymPy giving up on an expansion of odd input: nothing decided
+        return Verdict("undecided", "none", f"SymPy failed while {clock.doing}: {sympy_failure(exc)}")
 
 
 def _check(claim: str, sys_: System, given: Sequence[str], clock: Budget, *, points: int, seed: int,
@@ -499,10 +510,10 @@ def _check(claim: str, sys_: System, given: Sequence[str], clock: Budget, *, poi
             if present:  # a little time beyond a spent budget: the verdict is decided, this only qualifies it
                 clock.doing = "finding whether the proof used the parameters' positivity"
                 qualify = Budget(max(clock.left(), _QUALIFY))
-                done, used_ = qualify.attempt(lambda: _positivity_used(claim, given, sys_, (lhs, rhs, specs),
-                                                                       on_motion=on_motion, method=outcome.method,
-                                                                       clock=qualify), unbudgeted_ok=True)
-                positive = used_ if done else present
+                done, used_ = qualify.attempt(_quietly(lambda: _positivity_used(
+                    claim, given, sys_, (lhs, rhs, specs), on_motion=on_motion, method=outcome.method, clock=qualify,
+                )), unbudgeted_ok=True)
+                positive = used_ if done and used_ is not None else present  # (not found: say all of them)
             if positive:
                 assumptions.append(f"{', '.join(positive)} > 0: the proof uses the parameters' positivity")
         example = _with_given(outcome.counterexample, specs)

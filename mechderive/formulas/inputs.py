@@ -28,7 +28,7 @@ from .size import brief, tree_size
 from .systems import System
 
 __all__ = ["parse_givens", "parse_claim_within_limits", "bounded_input", "specialise", "naming", "label", "shown",
-           "MAX_INPUT_NODES", "MAX_INPUT_DEPTH", "MAX_GIVEN"]
+           "sympy_failure", "MAX_INPUT_NODES", "MAX_INPUT_DEPTH", "MAX_GIVEN", "SYMPY_ERRORS"]
 
 #: The largest tree a parsed side or --given value may have once the --given names are substituted.
 MAX_INPUT_NODES = 20_000
@@ -38,9 +38,10 @@ MAX_INPUT_DEPTH = 60
 #: The most --given entries.
 MAX_GIVEN = 20
 _MAX_BITS = 3400  # numbers below about 10^1000, as the parser's literals
-# What SymPy itself raises on some inputs while building an expression (InvalidInputError, a
-# ValueError, is caught before).
-_SYMPY_ERRORS = (TypeError, ValueError, ArithmeticError, RecursionError, NotImplementedError)
+#: What SymPy itself raises on some inputs while building or transforming an expression: atan2(0, zoo)
+#: "Invalid NaN comparison" (TypeError); sinh(sinh(…(30)…)) asks mpmath for 1 << 10^k (MemoryError, at
+#: once: nothing is allocated); a recursion too deep.  (InvalidInputError, a ValueError, is caught before.)
+SYMPY_ERRORS = (TypeError, ValueError, ArithmeticError, RecursionError, NotImplementedError, MemoryError)
 
 
 def label(what: str, text: object) -> str:
@@ -108,10 +109,16 @@ def naming(label: str) -> Iterator[None]:
         yield
     except InvalidInputError as exc:
         raise InvalidInputError(f"{label}: {exc}") from None
-    except _SYMPY_ERRORS as exc:
-        what = str(exc).strip().splitlines()[0][:80] if str(exc).strip() else type(exc).__name__
-        raise InvalidInputError(f"{label}: expected an expression SymPy can build, got {type(exc).__name__}: "
-                                f"{what}") from None
+    except SYMPY_ERRORS as exc:
+        raise InvalidInputError(f"{label}: expected an expression SymPy can build, got {sympy_failure(exc)}") from None
+
+
+def sympy_failure(exc: BaseException) -> str:
+    """One line saying what SymPy raised (a MemoryError has no message: a number too large to hold)."""
+    text = str(exc).strip().splitlines()[0][:80] if str(exc).strip() else ""
+    if isinstance(exc, MemoryError):
+        text = text or "a number too large to hold (a constant like sinh(sinh(…(30)…)) that SymPy evaluates)"
+    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
 
 
 def _parse_given(text: object, system: System, rename: dict, names: dict, specs: list, new: list) -> None:
