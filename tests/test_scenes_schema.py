@@ -372,6 +372,18 @@ def test_numbers_no_double_holds_are_named_as_written(literal, error, message):
         load_scene(HEAVY.replace("g = 9.81", f"g = {literal}"))
 
 
+def test_checks_near_the_largest_double_warn_of_nothing():
+    """Sums and squares of moments overflow to inf in the physics checks: their answers stand, silently."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a RuntimeWarning would be printed before the message
+        assert parse_scene(free(parameters={"I1": 1.7e308, "I2": 1.7e308, "I3": 1.7e308})).parameters["I1"] == 1.7e308
+        with pytest.raises(UnphysicalInertiaError, match=r"^scene keys \[parameters\]\.I1, .*got I1 - M l² = -inf "
+                                                         r"< I3/2 = 0\.25"):
+            parse_scene(heavy(parameters={"I1": 1e308, "I3": 0.5, "M": 1e308, "l": 1e308}))
+
+
 def test_huge_integers_elsewhere_in_the_text_are_left_alone():
     """Only integer values are marked: digits in strings, comments, floats and dates stay as written."""
     scene = load_scene(HEAVY.replace("g = 9.81", f"g = {'1' * 5000}.5e-4990  # {'2' * 5000}")

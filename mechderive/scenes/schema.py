@@ -195,7 +195,7 @@ class _Unrepresentable:
         self.text = text
 
     def __repr__(self) -> str:
-        return self.text
+        return _literal(self.text)
 
 
 class _Underflowed(float):
@@ -204,7 +204,12 @@ class _Underflowed(float):
     text: str
 
     def __repr__(self) -> str:
-        return f"{self.text} (0 in double precision)"
+        return f"{_literal(self.text)} (0 in double precision)"
+
+
+def _literal(text: str) -> str:
+    """A number as the scene spells it, shortened if it is long (``1e-`` and 5000 digits)."""
+    return text if len(text) <= 40 else f"{text[:12]}...{text[-12:]} (a number of {len(text)} characters)"
 
 
 def _digits(n: int) -> int:
@@ -356,13 +361,17 @@ def _parameters(system: str, given: Mapping[str, Any], strict: bool = True) -> d
         return p
     expected = "a number > 0" + ("" if strict else " (strict = false does not waive this)")
     p = {k: _number(_at("parameters", k), given[k], expected=expected, valid=lambda x: x > 0) for k in names}
+    # Sums and squares of moments near the largest double overflow to ±inf, which the comparisons order
+    # rightly (I1 + I2 = inf >= I3): the checks' answers stand; NumPy's RuntimeWarnings would only be noise
+    # printed before the message.
     try:
-        if system == "heavy_top":
-            heavy_top_parameters.check_params(p, strict=strict)
-        else:
-            from ..inertia.validate import check_principal_moments  # imports SymPy: only when needed
+        with np.errstate(all="ignore"):
+            if system == "heavy_top":
+                heavy_top_parameters.check_params(p, strict=strict)
+            else:
+                from ..inertia.validate import check_principal_moments  # imports SymPy: only when needed
 
-            check_principal_moments(p["I1"], p["I2"], p["I3"], strict=strict)
+                check_principal_moments(p["I1"], p["I2"], p["I3"], strict=strict)
     except InvalidInputError as exc:
         renamed = _rename_keys(exc, "parameters", names)
         raise type(renamed)(str(renamed).replace(heavy_top_parameters.STRICT_HINT, _SCENE_STRICT_HINT)) from exc
@@ -377,11 +386,12 @@ def waived(scene: "Scene") -> list[str]:
     if scene.strict or scene.system == "falling_cat":
         return []
     p = scene.parameters
-    if scene.system == "heavy_top":
-        return heavy_top_parameters.rigid_body_violations(p)
-    from ..inertia.validate import rigid_body_violations
+    with np.errstate(all="ignore"):  # as in _parameters
+        if scene.system == "heavy_top":
+            return heavy_top_parameters.rigid_body_violations(p)
+        from ..inertia.validate import rigid_body_violations
 
-    return rigid_body_violations(p["I1"], p["I2"], p["I3"])
+        return rigid_body_violations(p["I1"], p["I2"], p["I3"])
 
 
 def _initial(system: str, given: Mapping[str, Any]) -> dict[str, Any]:
