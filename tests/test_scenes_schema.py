@@ -300,6 +300,18 @@ def test_unknown_key_with_odd_characters_is_shown_escaped():
     ({"system": "falling_cat", "initial": {"shape": 1}, "time": {"t_end": 1, "samples": 2},
       "output": {"quantities": ["L1"]}}, InvalidInputError,
      r"scene key \[initial\]\.shape: unknown initial value for system 'falling_cat'; it takes none"),
+    # the cat's own checks (mechderive.systems.deformable.cat.check_cat_parameters), said of the scene keys
+    ({"system": "falling_cat", "parameters": {"radius": -0.25}, "time": {"t_end": 1, "samples": 2},
+      "output": {"quantities": ["L1"]}}, InvalidInputError,
+     r"^scene key \[parameters\]\.radius: expected a number > 0, got -0.25$"),
+    ({"system": "falling_cat", "parameters": {"peak_bend": 3.5}, "time": {"t_end": 1, "samples": 2},
+      "output": {"quantities": ["L1"]}}, InvalidInputError,
+     r"^scene key \[parameters\]\.peak_bend: expected a number in \(0, π\) \(rad: the halves must not fold "
+     r"through each other\), got 3.5$"),
+    ({"system": "falling_cat", "parameters": {"half_mass": 10 ** 400}, "time": {"t_end": 1, "samples": 2},
+      "output": {"quantities": ["L1"]}}, NonFiniteValueError,
+     r"^scene key \[parameters\]\.half_mass: expected a number > 0 \(a finite double: at most 1.8e\+308 in size\), "
+     r"got an integer of 401 digits$"),
 ], ids=lambda x: None)
 def test_value_errors(doc, error, message):
     with pytest.raises(error, match=message):
@@ -343,6 +355,47 @@ def test_toml_syntax_errors_are_wrapped(text, message):
 def test_nan_literal_in_toml_is_refused():
     with pytest.raises(NonFiniteValueError, match=r"scene key \[parameters\]\.g: expected a number > 0, got nan"):
         load_scene(HEAVY.replace("g = 9.81", "g = nan"))
+
+
+@pytest.mark.parametrize("literal, error, message", [
+    ("1e400", NonFiniteValueError,
+     r"^scene key \[parameters\]\.g: expected a number > 0 \(a finite double: at most 1.8e\+308 in size\), got 1e400$"),
+    ("-1" + "0" * 400, NonFiniteValueError, r"^scene key \[parameters\]\.g: .*, got an integer of 401 digits$"),
+    ("9" * 4301, NonFiniteValueError, r"^scene key \[parameters\]\.g: .*, got an integer of 4301 digits$"),
+    ("1_000" * 1200, NonFiniteValueError, r"^scene key \[parameters\]\.g: .*, got an integer of 4800 digits$"),
+    # nonzero, below the smallest double: 0, said so where 0 is refused
+    ("1e-400", InvalidInputError, r"^scene key \[parameters\]\.g: expected a number > 0, got 1e-400 "
+                                  r"\(0 in double precision\)$"),
+])
+def test_numbers_no_double_holds_are_named_as_written(literal, error, message):
+    with pytest.raises(error, match=message):
+        load_scene(HEAVY.replace("g = 9.81", f"g = {literal}"))
+
+
+def test_checks_near_the_largest_double_warn_of_nothing():
+    """Sums and squares of moments overflow to inf in the physics checks: their answers stand, silently."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a RuntimeWarning would be printed before the message
+        assert parse_scene(free(parameters={"I1": 1.7e308, "I2": 1.7e308, "I3": 1.7e308})).parameters["I1"] == 1.7e308
+        with pytest.raises(UnphysicalInertiaError, match=r"^scene keys \[parameters\]\.I1, .*got I1 - M l² = -inf "
+                                                         r"< I3/2 = 0\.25"):
+            parse_scene(heavy(parameters={"I1": 1e308, "I3": 0.5, "M": 1e308, "l": 1e308}))
+
+
+def test_huge_integers_elsewhere_in_the_text_are_left_alone():
+    """Only integer values are marked: digits in strings, comments, floats and dates stay as written."""
+    scene = load_scene(HEAVY.replace("g = 9.81", f"g = {'1' * 5000}.5e-4990  # {'2' * 5000}")
+                       .replace('system = "heavy_top"', f'system = "heavy_top"\nname = "x{"3" * 4400}"'), name="n")
+    assert scene.parameters["g"] == float(f"{'1' * 5000}.5e-4990")
+    with pytest.raises(InvalidInputError, match=r"^scene key name: expected a printable string of 1 to 100 "
+                                                r"characters, got 'x3333.*\(truncated\)$"):
+        load_scene(HEAVY.replace('system = "heavy_top"', f'system = "heavy_top"\nname = "x{"3" * 4400}"')
+                   .replace("samples = 1001", f"samples = {'4' * 4400}"))
+    with pytest.raises(InvalidInputError, match=r"^scene key \[time\]\.samples: .*got an integer of 4400 digits$"):
+        load_scene(HEAVY.replace('system = "heavy_top"', f'system = "heavy_top"\nname = "x{"3" * 50}"')
+                   .replace("samples = 1001", f"samples = {'4' * 4400}"))
 
 
 def test_datetime_value_is_named():
@@ -468,6 +521,12 @@ def test_every_builtin_parses_and_round_trips(name):
     assert scene == builtin.load_builtin(name)
     assert scene.name == name
     assert load_scene(scene_to_toml(scene)) == scene
+
+
+def test_size_estimate_of_every_builtin_is_within_the_limit():
+    for name, _ in builtin.list_scenes():
+        size = builtin.load_builtin(name).size_estimate
+        assert size.values == size.samples * size.columns and size.memory_bytes <= schema.MAX_RUN_BYTES
 
 
 def test_builtin_list_and_descriptions():

@@ -23,7 +23,8 @@ The format (optional keys marked)::
 
     [time]
     t_end = 10.0              # > 0
-    samples = 1001            # equally spaced on [0, t_end], both ends included; 2 <= samples <= 10^7
+    samples = 1001            # equally spaced on [0, t_end], both ends included; 2 <= samples <= 10^7,
+                              # and the run at most MAX_RUN_BYTES (1 GB, below)
 
     [output]
     quantities = ["theta", "phi", "psi"]   # names from QUANTITIES[system], each once
@@ -34,6 +35,18 @@ benchmarks break (moments (3, 3, 9); a heavy top with I1 < M l²); the run's rep
 what was waived.  Positive, finite values are required all the same.  A heavy top's
 ``Mgl`` replaces ``M``, ``g`` and ``l`` (only their product enters the motion): give it
 or all three, never both.
+
+Numbers are finite doubles: ``nan``, ``inf`` and any number spelled beyond the largest double
+(``1e400``, an integer of 400 digits — TOML integers have no size limit) are refused naming
+their key; a nonzero literal below the smallest double (``1e-400``) is 0.  Integers are accepted
+for floats.  The ranges of each key are those above; the systems' own checks (whose messages
+are re-worded to name the scene keys) may refuse more, e.g. a motion no double can follow.
+
+A scene's size is estimated before anything is solved (:attr:`Scene.size_estimate`): the run's
+peak memory (the solver's measured working memory per sample, plus the table) and its table as
+CSV must each stay within :data:`MAX_RUN_BYTES` (1 GB), else ``[time].samples`` is refused with
+the estimate and the most samples these quantities allow.  Scene files must be regular files
+(not a FIFO, a device or a directory) of at most :data:`MAX_SCENE_BYTES` bytes of UTF-8.
 
 Every refusal is an :class:`~mechderive.errors.InvalidInputError` (or a subclass:
 :class:`~mechderive.errors.NonFiniteValueError` for NaN/inf,
@@ -112,10 +125,10 @@ MAX_RUN_BYTES = 1_000_000_000
 #: the process's maxrss measured from 4·10⁴ (falling_cat) or 5·10⁵ samples, closed form and integration,
 #: one quantity and all: heavy_top 360-510, free_top 225-490, falling_cat 11,250 (its L is taken by
 #: differences over a 9-point stencil of rotations per sample).
-_SOLVE_BYTES_PER_SAMPLE = {"free_top": 600, "heavy_top": 600, "falling_cat": 12_000}
-#: Memory per value of the table (bytes): the float64 column, the columns the quantities are taken from and
+_SOLVE_BYTES_PER_SAMPLE = {"free_top": 600, "heavy_top": 600, "falling_cat": 12_500}
+#: Memory per value of the table (bytes): the float64 column, the arrays the quantities are taken from and
 #: the CSV writer's rows (measured 11-25 per column and sample on top of the solve).
-_BYTES_PER_VALUE = 40
+_BYTES_PER_VALUE = 30
 #: The CSV file per value (bytes): ``repr`` of a double has at most 24 characters, plus the separator.
 _CSV_BYTES_PER_VALUE = 25
 
@@ -136,9 +149,14 @@ QUANTITIES: dict[str, tuple[str, ...]] = {
     "falling_cat": (*_R, "q0", "q1", "q2", "q3", "flip_angle", "L1", "L2", "L3", "shape_bend", "shape_swivel"),
 }
 
-#: Parameters of the falling cat; a placeholder until the cat module registers its names.
-#: The falling cat's parameters (mechderive.systems.deformable.cat.check_cat_parameters validates them).
+#: The falling cat's parameters, all optional: lengths and a mass > 0, ``peak_bend`` in (0, π)
+#: (mechderive.systems.deformable.cat.check_cat_parameters validates them, and is called here).
 FALLING_CAT_PARAMETERS: tuple[str, ...] = ("half_mass", "joint_offset", "radius", "half_length", "peak_bend")
+_CAT_RANGES: dict[str, tuple[str, Callable[[float], bool]]] = {
+    **{k: ("a number > 0", lambda x: x > 0) for k in FALLING_CAT_PARAMETERS},
+    "peak_bend": ("a number in (0, π) (rad: the halves must not fold through each other)",
+                  lambda x: 0 < x < math.pi),
+}
 
 #: The [parameters] names per system.  free_top needs all of its; heavy_top all of
 #: I1 I3 M g l or all of I1 I3 Mgl; falling_cat's are optional and open to
@@ -177,7 +195,7 @@ class _Unrepresentable:
         self.text = text
 
     def __repr__(self) -> str:
-        return self.text
+        return _literal(self.text)
 
 
 class _Underflowed(float):
@@ -186,7 +204,12 @@ class _Underflowed(float):
     text: str
 
     def __repr__(self) -> str:
-        return f"{self.text} (0 in double precision)"
+        return f"{_literal(self.text)} (0 in double precision)"
+
+
+def _literal(text: str) -> str:
+    """A number as the scene spells it, shortened if it is long (``1e-`` and 5000 digits)."""
+    return text if len(text) <= 40 else f"{text[:12]}...{text[-12:]} (a number of {len(text)} characters)"
 
 
 def _digits(n: int) -> int:
@@ -324,17 +347,31 @@ def _parameters(system: str, given: Mapping[str, Any], strict: bool = True) -> d
     else:
         required = () if system in _OPEN_PARAMETERS else names
         _check_keys(given, "parameters", names, required, f"parameter for system {system!r}")
-    if system in _OPEN_PARAMETERS:
-        return {k: _number(_at("parameters", k), given[k]) for k in names if k in given}
+    if system == "falling_cat":
+        p = {}
+        for k in (k for k in names if k in given):  # registered names: any finite number
+            expected, valid = _CAT_RANGES.get(k, ("a finite number", lambda x: True))
+            p[k] = _number(_at("parameters", k), given[k], expected=expected, valid=valid)
+        from ..systems.deformable.cat import check_cat_parameters  # no SymPy: only the checks
+
+        try:
+            check_cat_parameters({k: v for k, v in p.items() if k in FALLING_CAT_PARAMETERS})
+        except InvalidInputError as exc:
+            raise _rename_keys(exc, "parameters", names) from exc
+        return p
     expected = "a number > 0" + ("" if strict else " (strict = false does not waive this)")
     p = {k: _number(_at("parameters", k), given[k], expected=expected, valid=lambda x: x > 0) for k in names}
+    # Sums and squares of moments near the largest double overflow to ±inf, which the comparisons order
+    # rightly (I1 + I2 = inf >= I3): the checks' answers stand; NumPy's RuntimeWarnings would only be noise
+    # printed before the message.
     try:
-        if system == "heavy_top":
-            heavy_top_parameters.check_params(p, strict=strict)
-        else:
-            from ..inertia.validate import check_principal_moments  # imports SymPy: only when needed
+        with np.errstate(all="ignore"):
+            if system == "heavy_top":
+                heavy_top_parameters.check_params(p, strict=strict)
+            else:
+                from ..inertia.validate import check_principal_moments  # imports SymPy: only when needed
 
-            check_principal_moments(p["I1"], p["I2"], p["I3"], strict=strict)
+                check_principal_moments(p["I1"], p["I2"], p["I3"], strict=strict)
     except InvalidInputError as exc:
         renamed = _rename_keys(exc, "parameters", names)
         raise type(renamed)(str(renamed).replace(heavy_top_parameters.STRICT_HINT, _SCENE_STRICT_HINT)) from exc
@@ -349,11 +386,12 @@ def waived(scene: "Scene") -> list[str]:
     if scene.strict or scene.system == "falling_cat":
         return []
     p = scene.parameters
-    if scene.system == "heavy_top":
-        return heavy_top_parameters.rigid_body_violations(p)
-    from ..inertia.validate import rigid_body_violations
+    with np.errstate(all="ignore"):  # as in _parameters
+        if scene.system == "heavy_top":
+            return heavy_top_parameters.rigid_body_violations(p)
+        from ..inertia.validate import rigid_body_violations
 
-    return rigid_body_violations(p["I1"], p["I2"], p["I3"])
+        return rigid_body_violations(p["I1"], p["I2"], p["I3"])
 
 
 def _initial(system: str, given: Mapping[str, Any]) -> dict[str, Any]:
@@ -600,6 +638,8 @@ def _read_file(path: Path, source: str) -> str:
         info = os.fstat(fd)
         if not stat.S_ISREG(info.st_mode):
             raise _not_regular(source, info.st_mode)
+        if info.st_size > MAX_SCENE_BYTES:
+            raise InvalidInputError(f"scene {source}: expected at most {MAX_SCENE_BYTES} bytes, got {info.st_size}")
         chunks, size = [], 0
         while size <= MAX_SCENE_BYTES and (chunk := os.read(fd, MAX_SCENE_BYTES + 1 - size)):
             chunks.append(chunk)
@@ -608,9 +648,8 @@ def _read_file(path: Path, source: str) -> str:
         raise _os_error(source, exc) from None
     finally:
         os.close(fd)
-    if size > MAX_SCENE_BYTES:
-        raise InvalidInputError(f"scene {source}: expected at most {MAX_SCENE_BYTES} bytes, got "
-                                + (f"{info.st_size}" if info.st_size > MAX_SCENE_BYTES else "more"))
+    if size > MAX_SCENE_BYTES:  # a file claiming less than it holds (/proc), or growing as it is read
+        raise InvalidInputError(f"scene {source}: expected at most {MAX_SCENE_BYTES} bytes, got more")
     data = b"".join(chunks).removeprefix(b"\xef\xbb\xbf")
     try:
         return data.decode("utf-8")
