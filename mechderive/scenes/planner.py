@@ -58,7 +58,7 @@ from ..core.drift import Drift, drift
 from ..core.model import derivation_log, derivation_seconds
 from ..errors import InvalidInputError, MechDeriveError
 from ..systems.heavy_top import parameters as heavy_top_parameters
-from .schema import Scene, waived
+from .schema import FALLING_CAT_PARAMETERS, Scene, waived
 from .units import (MAX_INTEGRATED_RADIANS, MAX_INTEGRATED_RADIANS_SCIPY, OUTPUT_KEYS, Scaled, check_invariants,
                     check_samples, in_scene_units, keys_text, scale_scene)
 
@@ -589,7 +589,7 @@ def choose_method(scene: Scene) -> tuple[str, str | None]:
 
 
 #: The falling cat's [parameters] names (its messages name them bare).
-FALLING_CAT_KEYS = ("half_mass", "joint_offset", "radius", "half_length", "peak_bend")
+FALLING_CAT_KEYS = FALLING_CAT_PARAMETERS
 #: The keys a message of each system's solvers may name, per table.
 _SCENE_KEYS = {
     "heavy_top": (("parameters", ("I1", "I3", "M", "g", "l", "Mgl")),
