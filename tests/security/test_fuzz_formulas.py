@@ -66,7 +66,8 @@ _NUMBERS = ["0", "1", "2", "7", "0.5", "1e-100", "1e100", "1e-101", "1e101", "1e
 _EXPONENTS = ["2", "3", "-1", "-2", "0", "(1/2)", "(1/3)", "(-3/2)", "100", "-100", "101", "(100/99)", "0.5",
               "1e2", "(2**7)", "10**10", "theta", "(1/101)", "(-100/3)", "omega1", "pi", "1e-100", "(2**0.5)"]
 _INJECTIONS = [
-    f"__import__('os').system('touch {CANARY}')", f"open('{CANARY}', 'w')", "().__class__.__bases__[0].__subclasses__()",
+    f"__import__('os').system('touch {CANARY}')", f"open('{CANARY}', 'w')",
+    "().__class__.__bases__[0].__subclasses__()",
     "(lambda: 1)()", "lambda x: x", "theta.__class__", "E.func", "exec('1')", "eval('1')", "open('/etc/passwd')",
     "getattr(theta, 'func')", "sympify('1')", "globals()", "__builtins__", "[x for x in ()]", "{1: 2}", "'str'",
     "b'x'", "f'{theta}'", "1j", "True", "None", "...", "theta if 1 else 0", "theta < 1", "not theta",
