@@ -31,6 +31,7 @@ import io
 import os
 import resource
 import sys
+import tempfile
 import time
 import warnings
 from dataclasses import dataclass
@@ -51,6 +52,8 @@ SLACK = 1.0  # seconds beyond --budget: the backstop interrupts any step 0.75 s 
 # What the tests allow: a full garbage collection or a big-integer operation cannot be interrupted, and on
 # a machine at load 8 on 2 cores one such step was once seen to take the decision to budget + 1.5 s.
 TEST_SLACK = 2.0
+#: The file the injection attempts try to create: it must never appear.
+CANARY = os.path.join(tempfile.gettempdir(), f"mechderive-fuzz-canary-{os.getpid()}")
 MEMORY = 1 << 30  # bytes: the issue's bound
 
 _NAMES = {name: sorted(get_system(name).names) for name in ("heavy_top", "free_top")}
@@ -63,7 +66,8 @@ _NUMBERS = ["0", "1", "2", "7", "0.5", "1e-100", "1e100", "1e-101", "1e101", "1e
 _EXPONENTS = ["2", "3", "-1", "-2", "0", "(1/2)", "(1/3)", "(-3/2)", "100", "-100", "101", "(100/99)", "0.5",
               "1e2", "(2**7)", "10**10", "theta", "(1/101)", "(-100/3)", "omega1", "pi", "1e-100", "(2**0.5)"]
 _INJECTIONS = [
-    "__import__('os').system('touch /tmp/mechderive-pwned')", "().__class__.__bases__[0].__subclasses__()",
+    f"__import__('os').system('touch {CANARY}')", f"open('{CANARY}', 'w')",
+    "().__class__.__bases__[0].__subclasses__()",
     "(lambda: 1)()", "lambda x: x", "theta.__class__", "E.func", "exec('1')", "eval('1')", "open('/etc/passwd')",
     "getattr(theta, 'func')", "sympify('1')", "globals()", "__builtins__", "[x for x in ()]", "{1: 2}", "'str'",
     "b'x'", "f'{theta}'", "1j", "True", "None", "...", "theta if 1 else 0", "theta < 1", "not theta",
@@ -231,6 +235,7 @@ def _fuzz(examples: int, budget: float):
         system, claim, given_ = case
         o = run_case(system, claim, given_, budget)
         assert not problems(o, budget, TEST_SLACK), (case, problems(o, budget, TEST_SLACK), o)
+        assert not os.path.exists(CANARY), (case, "injected code ran")
 
     one()
 
@@ -269,7 +274,7 @@ def report(cases_: list, budget: float, watchdog: float) -> dict:
         o = run_case(system, claim, given_, budget, watchdog)
         tally[str(o.status)] += 1
         slowest.append((o.seconds, system, claim[:100], given_))
-        bad = problems(o, budget)
+        bad = problems(o, budget) + (["injected code ran"] if os.path.exists(CANARY) else [])
         if bad:
             tally["finding"] += 1
             print(json.dumps({"k": k, "system": system, "claim": claim, "given": given_, "status": str(o.status),
