@@ -39,7 +39,7 @@ def _exists(path: Path, shown: str) -> bool:
     except (FileNotFoundError, NotADirectoryError, ValueError):  # ValueError: a NUL character
         return False
     except OSError as exc:  # too long, no permission to search a directory on the way, a loop of links
-        raise InvalidInputError(f"scene file {shown}: expected a file you can read, got {exc.strerror or exc}") from exc
+        raise InvalidInputError(f"scene file {shown}: cannot read it: {exc.strerror or exc}") from exc
     return True
 
 

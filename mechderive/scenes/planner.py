@@ -283,7 +283,7 @@ def _heavy_rate_bound(scene: Scene) -> float:
 
 def _check_integration_length(scene: Scene, rate: float, scaled: Scaled) -> None:
     """Refuse, naming t_end, an integration longer than :data:`~.units.MAX_INTEGRATED_RADIANS` of the fastest
-    rate (:data:`~.units.MAX_INTEGRATED_RADIANS_SCIPY` without the compiled stepper): ~10 s of work."""
+    rate (:data:`~.units.MAX_INTEGRATED_RADIANS_SCIPY` without the compiled stepper): minutes of work."""
     from ..core.cbuild import c_enabled
 
     budget, stepper = ((MAX_INTEGRATED_RADIANS, "") if c_enabled() else
@@ -297,7 +297,8 @@ def _check_integration_length(scene: Scene, rate: float, scaled: Scaled) -> None
         raise InvalidInputError(
             f"scene key [time].t_end: expected at most {limit:.6g} s for method 'integrate'{stepper} "
             f"({budget:.6g} rad at this motion's fastest rate, "
-            f"{float(np.ldexp(rate, scaled.rate)):.6g} rad/s: a longer run takes more than ~10 s), "
+            f"{float(np.ldexp(rate, scaled.rate)):.6g} rad/s: a longer run would take many minutes; "
+            f"method = \"exact\" solves the free and heavy tops at any t_end), "
             f"got {scaled.original.t_end!r}")
 
 

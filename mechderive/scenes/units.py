@@ -52,9 +52,12 @@ _COMFORTABLE = 64
 #: The longest integration a scene may ask for, in radians of the motion's fastest rate: the
 #: compiled DOP853 takes 60-600 right-hand sides per radian of a spinning top (measured: 6·10⁶ for
 #: 10⁴ rad of a top at ψ̇ = 10³ rad/s, 6·10⁷ for 10⁶ rad at ψ̇ = 10⁵, rtol 1e-9, ~1 µs each), so
-#: 2^14 rad is ~10 s of work at most; SciPy's stepper (no C compiler) is ~100× slower per step: 2^11 rad.
-MAX_INTEGRATED_RADIANS = 2.0**14
-MAX_INTEGRATED_RADIANS_SCIPY = 2.0**11
+#: 2^18 rad is seconds to a few minutes of work, about where the stepper's own limit of 10⁷ steps
+#: (:data:`mechderive.solvers.limits.MAX_STEPS`) would stop it anyway; a gyroscope at 100 rad/s for
+#: 1000 s (10⁵ rad) is allowed.  SciPy's stepper (no C compiler) is ~100× slower per step: 2^14 rad.
+#: Ctrl-C stops either within a second.
+MAX_INTEGRATED_RADIANS = 2.0**18
+MAX_INTEGRATED_RADIANS_SCIPY = 2.0**14
 
 _RATE_KEYS = ("theta_dot", "phi_dot", "psi_dot")
 

@@ -559,11 +559,11 @@ def test_derive_and_scenes_options_anywhere(argv, expected):
 # --- the scene argument (finding 5, its command-line part) ---------------------------------------------
 
 @pytest.mark.parametrize("spec, message", [
-    ("a" * 300 + ".toml", "expected a file you can read, got File name too long"),
-    ("a" * 300, "expected a file you can read, got File name too long"),  # not even a built-in name
-    ("d/" * 2100 + "x.toml", "expected a file you can read, got File name too long"),
-    ("loop.toml", "expected a file you can read, got Too many levels of symbolic links"),
-    ("unreadable/s.toml", "expected a file you can read, got Permission denied"),
+    ("a" * 300 + ".toml", "cannot read it: File name too long"),
+    ("a" * 300, "cannot read it: File name too long"),  # not even a built-in name
+    ("d/" * 2100 + "x.toml", "cannot read it: File name too long"),
+    ("loop.toml", "cannot read it: Too many levels of symbolic links"),
+    ("unreadable/s.toml", "cannot read it: Permission denied"),
 ], ids=["long name .toml", "long name", "long path", "link loop", "unreadable directory"])
 def test_scene_argument_the_system_cannot_look_up(monkeypatch, capsys, solved, tmp_path, spec, message):
     # Path.exists() used to raise these (ENAMETOOLONG, ELOOP, EACCES): status 70, "a bug".

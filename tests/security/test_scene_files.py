@@ -287,8 +287,6 @@ def _cli_error(path: Path) -> str:
     return f"{status} {err.strip()}"
 
 
-@pytest.mark.xfail(strict=True, reason="cli/run.py _load calls Path.exists(), which raises PermissionError "
-                                       "(not ours: the lead's fix, see the note of branch scenes)")
 def test_the_cli_refuses_a_scene_under_an_unreadable_directory(locked_scene):
     run("run", str(locked_scene.parent.parent / "missing.toml"))  # import what the run needs while root
     message = _as_nobody(_cli_error, locked_scene) if os.geteuid() == 0 else _cli_error(locked_scene)
