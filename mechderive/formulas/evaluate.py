@@ -53,6 +53,7 @@ from typing import Mapping
 import mpmath
 import sympy as sp
 
+from ..core.symbols import as_symbolic
 from .size import brief
 
 __all__ = ["evaluate", "evaluate_terms", "Terms", "PointRejected", "Unresolved", "CannotEvaluate",
@@ -301,7 +302,7 @@ def evaluate_terms(expr: sp.Basic, point: Mapping[sp.Symbol, sp.Rational], *, dp
     """
     with mpmath.workdps(dps):
         ev = _Evaluator(point)
-        v, e, s = ev(sp.sympify(expr))
+        v, e, s = ev(as_symbolic(expr))
         return Terms(v, e, s, ev.depth)
 
 

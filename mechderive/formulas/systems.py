@@ -45,7 +45,7 @@ from typing import Callable, Iterable, Mapping
 
 import sympy as sp
 
-from ..core.symbols import state_symbol
+from ..core.symbols import as_symbolic, state_symbol
 from ..errors import InvalidInputError
 
 __all__ = ["Quantity", "BodyRegion", "System", "get_system", "SYSTEMS"]
@@ -232,7 +232,7 @@ class System:
             q = self._by_symbol.get(sym)
             if q is None or q.define is None:
                 raise InvalidInputError(f"expected a defined quantity of {self.name}, got {sym}")
-            self._definitions[sym] = sp.sympify(q.define(self))
+            self._definitions[sym] = as_symbolic(q.define(self))
         return self._definitions[sym]
 
     def expand_definitions(self, expr: sp.Expr) -> sp.Expr:

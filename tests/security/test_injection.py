@@ -291,10 +291,7 @@ def test_fuzz_derive_arguments(kind, text):
 _ALLOWED = {("core/codecache.py", "_load", "exec"), ("core/codecache.py", "_code", "compile")}
 #: sympify without strict=True in files of other parts of issue 12: to make strict (each gets only
 #: SymPy objects from the package, but takes a public argument a program may pass text to).
-_PENDING = {
-    ("formulas/evaluate.py", "evaluate_terms"), ("formulas/systems.py", "definition"),
-    ("systems/heavy_top/model.py", "_in_u"),
-}
+_PENDING: set[tuple[str, str]] = set()   # sites still to be made strict (none left)
 _PARSERS = {"parse_expr", "parse_latex", "parse_mathematica", "eval_expr", "stringify_expr"}
 
 

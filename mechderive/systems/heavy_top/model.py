@@ -45,7 +45,7 @@ import sympy as sp
 from ...core.lagrangian import LagrangianModel, from_state_symbols, vanishes
 from ...core.model import derived
 from ...core.simplify import simplify_trig, trig_normal
-from ...core.symbols import euler_angles, state_symbol, t, to_state_symbols
+from ...core.symbols import as_symbolic, euler_angles, state_symbol, t, to_state_symbols
 from ...errors import DerivationError
 from ...kinematics import euler as _euler
 
@@ -85,7 +85,7 @@ def _readable(expr: sp.Expr, collect: tuple = (I1, I3)) -> sp.Expr:
 
 def _in_u(expr: sp.Expr) -> sp.Expr:
     """``expr`` with θ = arccos u (so cos θ = u, sin θ = √(1 − u²) for 0 ≤ θ ≤ π), as one fraction."""
-    return sp.factor(sp.cancel(sp.sympify(expr).subs(theta, sp.acos(u))))
+    return sp.factor(sp.cancel(as_symbolic(expr).subs(theta, sp.acos(u))))
 
 
 def _over_one_minus_u2(expr: sp.Expr) -> sp.Expr:
