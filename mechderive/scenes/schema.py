@@ -470,6 +470,7 @@ class SizeEstimate:
 
     @classmethod
     def of(cls, system: str, samples: int, quantities: int) -> "SizeEstimate":
+        """The estimate for ``samples`` samples of ``quantities`` quantities (and ``t``) of ``system``."""
         columns = quantities + 1
         values = samples * columns
         return cls(samples, columns, values, 8 * values, _CSV_BYTES_PER_VALUE * values,
