@@ -15,8 +15,7 @@ in-process through :func:`mechderive.cli.main` and must
 Exit 70 (an internal error) or any other status is a bug.  The default run draws numbers from
 what the schema refuses and from ordinary magnitudes (|x| ≤ 100); magnitudes the schema accepts
 but the solvers must then handle (1e300, 5e-324: :data:`EXTREMES`) are swept key by key in a slow
-test, each run forked and killed at the time limit, as are the few ordinary scenes
-:func:`pending_in_solvers` lists (both part of issue 12 outside the scene schema: see that test).
+test, each run forked and killed at the time limit.
 The budgets are for a warm disk cache of compiled code: a module fixture first runs each base
 scene once, so that the derivations (the same the built-in scenes need) are not timed.
 """
@@ -275,34 +274,9 @@ def _case(doc: dict[str, Any], *args: Any) -> Case:
     return case
 
 
-def _positive_number(value: Any) -> bool:
-    if isinstance(value, Raw):
-        try:
-            value = float(value.replace("_", ""))
-        except ValueError:
-            return False
-    return type(value) in (int, float) and value > 0
-
-
-def pending_in_solvers(doc: dict[str, Any]) -> bool:
-    """Valid scenes that the solvers refuse without naming a scene key (or with an internal check's words):
-    issue 12 findings of helper numerics' part, left to the slow sweep of :data:`EXTREMES` until fixed.
-
-    A falling cat with other body dimensions than the default ("expected a body that can turn over with a
-    bend below 3.00 rad, got {...}") or with rtol > 1e-4 ("expected `R` orthogonal (RᵀR = 1 within 1e-09)").
-    """
-    if doc.get("system") != "falling_cat":
-        return False
-    body = doc.get("parameters")
-    if isinstance(body, dict) and any(_positive_number(v) and v != CAT_DEFAULTS[k]
-                                      for k, v in body.items() if k in CAT_DEFAULTS):
-        return True
-    return _positive_number(doc.get("rtol")) and 1e-4 < float(str(doc["rtol"]).replace("_", "")) <= 1e-2
-
-
 def scene_cases(numbers: list = ORDINARY, strings: list = STRINGS) -> st.SearchStrategy:
-    """Scene files made by one mutation of a base scene, but for :func:`pending_in_solvers` ones."""
-    return _mutated(numbers, strings).filter(lambda case: not pending_in_solvers(case.doc))
+    """Scene files made by one mutation of a base scene."""
+    return _mutated(numbers, strings)
 
 
 # ----------------------------------------------------------------------------- running one
@@ -442,8 +416,6 @@ def _set(doc: dict[str, Any], table: str | None, key: str, value: Any) -> dict[s
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=False, reason="issue 12 findings 4, 5, 7 in the solvers (helper numerics): e.g. I1 = 1e300, "
-                                        "theta_dot = 1e300, t_end = 1e30, a cat's radius = 1e300 (hangs)")
 def test_extreme_magnitudes_of_every_numeric_key_run_or_are_refused_in_one_line(tmp_path: Path,
                                                                                warm_cache: None) -> None:
     """Every number of every base scene set to each of :data:`EXTREMES` (finite doubles the schema accepts),
