@@ -327,7 +327,7 @@ def _heavy_integrate(scene: Scene, t: np.ndarray) -> tuple[dict, dict, Any]:
                                      "omega": traj.omega, "apex": traj.R[:, 2, :]}
     need = _heavy_needs(scene.quantities)
     if any(k in need for k in ("theta_dot", "phi_dot", "psi_dot")):
-        with np.errstate(divide="ignore", invalid="ignore"):
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             rates = euler_rates(theta, psi, *traj.omega.T)  # singular where sin θ = 0: inf/nan reported there
         values.update(phi_dot=rates[:, 0], theta_dot=rates[:, 1], psi_dot=rates[:, 2])
     # E, p_φ, p_ψ from ω and R (the integrator's own invariants), not through the Euler rates,
@@ -717,8 +717,9 @@ def run_scene(scene: Scene) -> RunResult:
         for q in scaled.offsets:
             if q in cols:
                 # the turns added back: the rounding of φ0 itself and of each output, a few ulp of the larger
-                info["error_estimate"] = max(info["error_estimate"], 4 * float(np.spacing(max(
-                    float(np.max(np.abs(cols[q]))), abs(scaled.original.initial[q])))))
+                with np.errstate(over="ignore"):  # spacing of the largest double is inf: so is the estimate
+                    info["error_estimate"] = max(info["error_estimate"], 4 * float(np.spacing(max(
+                        float(np.max(np.abs(cols[q]))), abs(scaled.original.initial[q])))))
     derived = derivation_log()[derived0:]
     compiled = compiled_since()
     derive_s = derivation_seconds() - seconds0
