@@ -295,3 +295,20 @@ def test_plot_interrupted_leaves_no_file(tmp_path, monkeypatch):
 def test_namespace_carries_the_command():
     args = parse_args(build_parser(), ["scenes"])
     assert isinstance(args, argparse.Namespace) and args.command == "scenes" and args.name is None
+
+
+@pytest.mark.parametrize("argv,named", [
+    (["check", "heavy_top", "E = E", "--budget", "abc"], "check: argument --budget"),
+    (["run", "--bogus"], "run: unrecognized arguments: --bogus"),
+    (["frob"], "invalid choice: 'frob'"),
+    (["derive", "heavy_top", "--pivot"], "derive: argument --pivot"),
+])
+def test_usage_errors_are_one_line_naming_the_argument(argv, named, capsys):
+    """argparse's own errors (usage text plus a line) are one line like every other input error: exit 2."""
+    from mechderive.cli import main
+
+    with pytest.raises(SystemExit) as exc:
+        main(argv)
+    err = capsys.readouterr().err
+    assert exc.value.code == 2
+    assert err.count("\n") == 1 and err.startswith("mechderive: error: ") and named in err, err

@@ -55,12 +55,20 @@ _DISK_FULL = frozenset(getattr(errno, name) for name in ("ENOSPC", "EDQUOT", "EF
 
 
 class _Parser(argparse.ArgumentParser):
-    """argparse's parser, except that help and version text that cannot be written is an error.
+    """argparse's parser, except that help and version text that cannot be written is an error
+    and a usage error is one line ``mechderive: error: COMMAND: what was wrong (see … --help)``.
 
     argparse drops an :class:`OSError` while printing (``mechderive --help | head -1``,
     ``--help > /dev/full``) and exits 0; on stdout it now reaches :func:`main`, which
     answers 141 or status 2 as for any other output.  Subcommand parsers inherit the class.
     """
+
+    def error(self, message: str):  # type: ignore[override]
+        """A usage error as one line, like every other input error (argparse prints the usage too)."""
+        command = self.prog.removeprefix("mechderive").strip()
+        where = f"{command}: " if command else ""
+        _say(f"mechderive: error: {where}{message} (see `{self.prog} --help`)")
+        self.exit(EXIT_INPUT)
 
     def _print_message(self, message: str, file=None) -> None:  # type: ignore[override]
         if message and file is sys.stdout:
