@@ -60,16 +60,8 @@ class Raw(str):
 _BARE = re.compile(r"[A-Za-z0-9_-]+")
 
 
-def toml_string(s: str) -> str:
-    out = []
-    for ch in s:
-        if ch in '"\\':
-            out.append("\\" + ch)
-        elif ord(ch) < 0x20 or ord(ch) == 0x7F:
-            out.append(f"\\u{ord(ch):04X}")
-        else:
-            out.append(ch)
-    return '"' + "".join(out) + '"'
+# The package's own TOML string writer (scene_to_toml uses it): the fuzz writes scenes the way the package does.
+from mechderive.scenes.schema import _toml_string as toml_string  # noqa: E402
 
 
 def toml_key(k: str) -> str:

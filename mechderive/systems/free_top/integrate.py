@@ -348,7 +348,7 @@ def integrate_free_top(I: Sequence[float], omega0: Sequence[float], t_eval: Sequ
         is floored at 2.3e-14, SciPy's limit; below 2.3e-13 it runs looser, at 10·rtol, and the
         figure is an upper bound ~10× the error); splitting — Richardson with the known order p,
         |y_h - y_(h/2)| · 2^p / (2^p - 1) · 1.25 (the rerun costs twice the main run).
-    max_steps : steps allowed to each run (default :data:`~mechderive.solvers.limits.MAX_STEPS` = 10⁸):
+    max_steps : steps allowed to each run (default :data:`~mechderive.solvers.limits.MAX_STEPS` = 10⁷):
         DOP853 stops there with an :class:`IntegrationError` saying where it got to; the splitting,
         whose steps are known in advance, refuses at once.
 
