@@ -184,12 +184,7 @@ def _writable_target(path: Path, what: str) -> tuple[Path, os.stat_result | None
     if len(os.fsencode(target.name)) > _NAME_MAX:
         raise InvalidInputError(f"{shown}: expected names of at most {_NAME_MAX} bytes, "
                                 f"got one of {len(os.fsencode(target.name))}{where}")
-    try:
-        old: os.stat_result | None = os.stat(target)
-    except (FileNotFoundError, NotADirectoryError):
-        old = None
-    except OSError as exc:
-        raise _lookup_error(target, exc, shown) from exc
+    old = _stat_or_none(target, shown)
     if old is not None:
         if stat.S_ISDIR(old.st_mode):
             raise InvalidInputError(f"{shown}: expected a file name, got a directory{where}")
@@ -199,12 +194,7 @@ def _writable_target(path: Path, what: str) -> tuple[Path, os.stat_result | None
         if not os.access(target, os.W_OK):
             raise InvalidInputError(f"{shown}: expected a file you may write to, got a read-only one{where}")
     parent = target.parent
-    try:
-        parent_st: os.stat_result | None = os.stat(parent)
-    except (FileNotFoundError, NotADirectoryError):
-        parent_st = None
-    except OSError as exc:
-        raise _lookup_error(parent, exc, shown) from exc
+    parent_st = _stat_or_none(parent, shown)
     if parent_st is None or not stat.S_ISDIR(parent_st.st_mode):
         raise InvalidInputError(f"{shown}: expected an existing directory, got {_shown(parent)}{where}")
     if not os.access(parent, os.W_OK | os.X_OK):
@@ -217,6 +207,16 @@ def _writable_target(path: Path, what: str) -> tuple[Path, os.stat_result | None
         raise InvalidInputError(f"{shown}: expected a file of yours in the sticky directory {_shown(parent)}, "
                                 f"got one owned by uid {old.st_uid}{where}")
     return target, old
+
+
+def _stat_or_none(path: Path, shown: str) -> os.stat_result | None:
+    """``os.stat(path)``, None when nothing is there; any other failure to look it up is the user's error."""
+    try:
+        return os.stat(path)
+    except (FileNotFoundError, NotADirectoryError):
+        return None
+    except OSError as exc:
+        raise _lookup_error(path, exc, shown) from exc
 
 
 def check_output_path(path: str | os.PathLike, suffixes: Sequence[str], *, what: str = "output file") -> Path:
