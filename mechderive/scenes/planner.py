@@ -58,6 +58,7 @@ from ..core.drift import Drift, drift
 from ..core.model import derivation_log, derivation_seconds
 from ..errors import InvalidInputError, MechDeriveError
 from ..systems.heavy_top import parameters as heavy_top_parameters
+from ..systems.base import OutOfReach as SystemOutOfReach, Solved
 from .schema import FALLING_CAT_PARAMETERS, Scene, waived
 from .units import (MAX_INTEGRATED_RADIANS, MAX_INTEGRATED_RADIANS_SCIPY, OUTPUT_KEYS, Scaled, check_invariants,
                     check_samples, in_scene_units, keys_text, scale_scene)
@@ -577,9 +578,28 @@ _SYSTEMS: dict[str, dict[str, Callable]] = {
 }
 
 
+def _registered(model: Any) -> dict[str, Callable]:
+    """The planner's table for a system of the registry (:class:`~mechderive.systems.base.System`)."""
+    def solver(method: str) -> Callable:
+        def solve(scene: Scene, t: np.ndarray) -> tuple:
+            try:
+                return tuple(model.solve(scene, method, t))
+            except SystemOutOfReach as exc:
+                raise _OutOfReach(str(exc)) from exc
+        return solve
+
+    table: dict[str, Callable] = {m: solver(m) for m in model.methods}
+    table["drift"] = lambda scene, cols, solution, t: model.drift(scene, Solved(cols, {}, solution), t)
+    return table
+
+
+def _system_table(scene: Scene) -> dict[str, Callable]:
+    return _SYSTEMS[scene.system] if scene.system in _SYSTEMS else _registered(scene.model)
+
+
 def choose_method(scene: Scene) -> tuple[str, str | None]:
     """(method, note): the solver a scene will use and, if the request cannot be met before the run, why."""
-    system = _SYSTEMS[scene.system]
+    system = _system_table(scene)
     if scene.method == "exact" and "exact" not in system:
         raise InvalidInputError(f"scene method 'exact': system {scene.system!r} has no closed form; "
                                 "expected method 'auto' or 'integrate'")
@@ -624,9 +644,12 @@ def _scene_error(scene: Scene, exc: MechDeriveError) -> MechDeriveError:
     message = str(exc)
     if message.startswith("scene "):
         return exc
-    keys = [f"[{table}].{k}" for table, names in _SCENE_KEYS[scene.system] for k in _mentioned(message, names)]
+    tables = _SCENE_KEYS.get(scene.system) or (
+        ("parameters", tuple(k.name for k in scene.model.parameters)),
+        ("initial", tuple(k.name for k in scene.model.initial)))
+    keys = [f"[{table}].{k}" for table, names in tables for k in _mentioned(message, names)]
     where = ("scene keys " + ", ".join(keys) if len(keys) > 1 else f"scene key {keys[0]}" if keys else
-             "scene tables " + ", ".join(f"[{table}]" for table, _ in _SCENE_KEYS[scene.system]))
+             "scene tables " + ", ".join(f"[{table}]" for table, _ in tables))
     return type(exc)(f"{where}: {message}")
 
 
@@ -651,7 +674,7 @@ def _with_units(scaled: Scaled, solve: Callable, scene: Scene, t: np.ndarray) ->
 def _solve(scene: Scene, method: str, scaled: Scaled, t: np.ndarray) -> tuple[str, str | None, tuple]:
     """(method used, note, (columns, info, solution)) in the solver's units; ``auto`` integrates where the
     closed form cannot follow the motion, and says so."""
-    system = _SYSTEMS[scene.system]
+    system = _system_table(scene)
     work = scaled.scene
     try:
         return method, None, _with_units(scaled, system[method], work, t)
@@ -681,7 +704,7 @@ def run_scene(scene: Scene) -> RunResult:
     t = np.linspace(0.0, scene.t_end, scene.samples)
     check_samples(scene, t)
     method, note = choose_method(scene)
-    system = _SYSTEMS[scene.system]
+    system = _system_table(scene)
     if scene.system == "falling_cat":
         # the cat's parameters are open in the schema: checked here, in the scene's own units (the
         # bounds in the messages are then the scene's), before they are scaled

@@ -84,7 +84,7 @@ import secrets
 import stat
 import sys
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Iterable, Mapping
 
@@ -385,6 +385,8 @@ def waived(scene: "Scene") -> list[str]:
     """
     if scene.strict or scene.system == "falling_cat":
         return []
+    if scene.system not in SYSTEMS:
+        return list(scene.model.waived(scene.parameters))
     p = scene.parameters
     with np.errstate(all="ignore"):  # as in _parameters
         if scene.system == "heavy_top":
@@ -419,7 +421,10 @@ def _initial(system: str, given: Mapping[str, Any]) -> dict[str, Any]:
 
 
 def _quantities(system: str, value: Any) -> tuple[str, ...]:
-    allowed = QUANTITIES[system]
+    return _quantity_list(system, value, QUANTITIES[system])
+
+
+def _quantity_list(system: str, value: Any, allowed: tuple[str, ...]) -> tuple[str, ...]:
     if not isinstance(value, (list, tuple)) or not value:
         _fail("[output].quantities", f"a non-empty list of quantity names (for {system}: {_one_of(allowed)})",
               value)
@@ -473,8 +478,14 @@ class SizeEstimate:
         """The estimate for ``samples`` samples of ``quantities`` quantities (and ``t``) of ``system``."""
         columns = quantities + 1
         values = samples * columns
+        if system in _SOLVE_BYTES_PER_SAMPLE:
+            per_sample = _SOLVE_BYTES_PER_SAMPLE[system]
+        else:
+            from ..systems import registry
+
+            per_sample = registry.get(system).bytes_per_sample
         return cls(samples, columns, values, 8 * values, _CSV_BYTES_PER_VALUE * values,
-                   samples * _SOLVE_BYTES_PER_SAMPLE[system] + _BYTES_PER_VALUE * values)
+                   samples * per_sample + _BYTES_PER_VALUE * values)
 
     @property
     def max_samples(self) -> int:
@@ -517,12 +528,20 @@ class Scene:
     quantities: tuple
     name: str | None = None
     strict: bool = DEFAULT_STRICT
+    #: the system's own top-level keys and tables (its ``extra_keys``: a ``lagrangian``'s ``coordinates``, ...)
+    definition: Mapping[str, Any] = field(default_factory=dict)
+    #: the concrete system (:class:`~mechderive.systems.base.System`) this scene runs, set on construction
+    model: Any = field(default=None, compare=False, repr=False)
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
         set_(self, "name", _name(self.name))
         if not isinstance(self.strict, bool):
             _fail("strict", "true or false (a boolean; false accepts moments no rigid body has)", self.strict)
+        if self.system not in SYSTEMS:
+            self._post_init_registered()
+            return
+        set_(self, "definition", {})
         system = _choice("system", self.system, SYSTEMS)
         set_(self, "method", _choice("method", self.method, METHODS))
         lo, hi = RTOL_RANGE
@@ -537,6 +556,32 @@ class Scene:
             _fail("[time].samples", f"an integer in [2, {MAX_SAMPLES}]", self.samples)
         set_(self, "samples", int(self.samples))
         set_(self, "quantities", _quantities(system, self.quantities))
+        _check_size(self)
+
+    def _post_init_registered(self) -> None:
+        """Check the fields of a scene of a registered system through the system itself."""
+        from ..systems import registry
+
+        set_ = object.__setattr__
+        system = registry.get(self.system) if isinstance(self.system, str) else _choice("system", self.system,
+                                                                                         registry.names())
+        model = system.configure(dict(self.definition or {}))
+        set_(self, "model", model)
+        set_(self, "definition", dict(self.definition or {}))
+        set_(self, "method", _choice("method", self.method, ("auto", *model.methods)))
+        lo, hi = RTOL_RANGE
+        set_(self, "rtol", _number("rtol", self.rtol, expected=f"a number in [{lo:g}, {hi:g}]",
+                                   valid=lambda x: lo <= x <= hi))
+        set_(self, "parameters", model.check_parameters(_as_table("[parameters]", self.parameters or {}),
+                                                        strict=self.strict))
+        set_(self, "initial", model.check_initial(_as_table("[initial]", self.initial or {}), self.parameters))
+        set_(self, "t_end", _number("[time].t_end", self.t_end, expected="a finite number > 0",
+                                    valid=lambda x: x > 0))
+        if (isinstance(self.samples, bool) or not isinstance(self.samples, (int, np.integer))
+                or not 2 <= self.samples <= MAX_SAMPLES):
+            _fail("[time].samples", f"an integer in [2, {MAX_SAMPLES}]", self.samples)
+        set_(self, "samples", int(self.samples))
+        set_(self, "quantities", _quantity_list(self.system, self.quantities, model.quantity_names()))
         _check_size(self)
 
     @property
@@ -565,6 +610,8 @@ method, rtol, strict and tables [parameters], [initial], [time], [output]
     """
     if not isinstance(mapping, Mapping):
         raise InvalidInputError(f"scene: expected a table of keys (a mapping), got {_show(mapping)}")
+    if isinstance(mapping.get("system"), str) and mapping["system"] not in SYSTEMS:
+        return _parse_registered(mapping, name)
     tables = ", ".join(f"[{t}]" for t in TABLES)
     for key, value in mapping.items():
         if key in TABLES:
@@ -593,6 +640,38 @@ method, rtol, strict and tables [parameters], [initial], [time], [output]
                  t_end=time["t_end"], samples=time["samples"], quantities=output["quantities"],
                  name=name if name is not None else mapping.get("name"),
                  strict=mapping.get("strict", DEFAULT_STRICT))
+
+
+def _parse_registered(mapping: Mapping[str, Any], name: str | None) -> Scene:
+    from ..systems import registry
+
+    system = registry.get(mapping["system"]) if mapping["system"] in registry.names() else _choice(
+        "system", mapping["system"], registry.names())
+    extra = tuple(system.extra_keys)
+    tables = ", ".join(f"[{t}]" for t in TABLES)
+    for key, value in mapping.items():
+        if key in TABLES:
+            _as_table(f"[{key}]", value)
+        elif key not in TOP_LEVEL_KEYS and key not in extra:
+            allowed = _one_of(TOP_LEVEL_KEYS + extra)
+            raise InvalidInputError(f"scene key {_key_name(key)}: unknown key; expected top-level keys "
+                                    f"{allowed} and tables {tables}")
+    needed = [t for t in ("time", "output") if t not in mapping]
+    if needed:
+        raise InvalidInputError(f"scene table [{needed[0]}]: missing; system {system.name!r} needs tables "
+                                "[time], [output]")
+    time, output = mapping["time"], mapping["output"]
+    _check_keys(time, "time", TIME_KEYS, TIME_KEYS, "key")
+    out_keys = ("quantities", *(k for k in ("expressions",) if "output.expressions" in extra))
+    _check_keys(output, "output", out_keys, OUTPUT_KEYS, "key")
+    definition = {k: mapping[k] for k in extra if k in mapping and not k.startswith("output.")}
+    if "output.expressions" in extra and "expressions" in output:
+        definition["output.expressions"] = output["expressions"]
+    return Scene(system=system.name, method=mapping.get("method", DEFAULT_METHOD),
+                 rtol=mapping.get("rtol", DEFAULT_RTOL), parameters=mapping.get("parameters", {}),
+                 initial=mapping.get("initial", {}), t_end=time["t_end"], samples=time["samples"],
+                 quantities=output["quantities"], name=name if name is not None else mapping.get("name"),
+                 strict=mapping.get("strict", DEFAULT_STRICT), definition=definition)
 
 
 # ----------------------------------------------------------------------------- reading

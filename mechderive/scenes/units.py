@@ -276,7 +276,8 @@ def _cat(scene: Scene) -> Scaled:
 
 def scale_scene(scene: Scene) -> Scaled:
     """The scene in the units of its own motion (see the module docstring); the scene itself when comfortable."""
-    return {"heavy_top": _heavy, "free_top": _free, "falling_cat": _cat}[scene.system](scene)
+    legacy = {"heavy_top": _heavy, "free_top": _free, "falling_cat": _cat}.get(scene.system)
+    return legacy(scene) if legacy is not None else scene.model.scale(scene)
 
 
 # --------------------------------------------------------------------------------------------- reach

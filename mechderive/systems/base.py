@@ -1,0 +1,192 @@
+"""The ``System`` protocol: what a physical system tells the scenes, ``derive``, ``check`` and plots.
+
+A system is one object.  The generic layers (scene schema, planner, units, ``derive``, ``check``,
+``interop``, plots, the CLI) ask it — through :mod:`mechderive.systems.registry` — and never name a
+system.  A system carries:
+
+* its scene schema: the ``[parameters]`` and ``[initial]`` keys (:class:`Key`: name, unit, meaning,
+  required or default) and the checks of their values (:meth:`System.check_parameters`,
+  :meth:`System.check_initial`), plus any further top-level keys or tables it reads
+  (:attr:`System.extra_keys`, e.g. a ``lagrangian`` system's ``coordinates`` and ``lagrangian``);
+* the quantities it can output (:class:`Quantity`: name, unit, meaning) and, in
+  :meth:`System.solve`, the laziness of each (a solve derives, compiles and evaluates only what the
+  requested quantities need);
+* its solvers: ``methods`` lists ``"exact"`` first where a closed form exists, ``"integrate"``
+  always; :meth:`System.solve` returns the columns, a report and the solved object, raising
+  :class:`OutOfReach` where a closed form cannot follow a motion (``method = "auto"`` then
+  integrates);
+* the conserved quantities' drift along a solution (:meth:`System.drift`);
+* its derived formulas for ``derive`` (:meth:`System.derivations`), its symbols for ``check``
+  (:meth:`System.check_system`), optionally a plot (:meth:`System.plot`) and a default scene
+  (:meth:`System.example_scene`).
+
+A *family* of systems — ``rigid_body``, ``lagrangian`` — is one registered object whose
+:meth:`System.configure` builds the concrete system from the scene's own definition (its
+``extra_keys``); a built-in system returns itself.
+
+Adding a system is one package under ``mechderive/systems/`` defining a subclass of
+:class:`System`, and one registration (:func:`mechderive.systems.registry.register`, or one line in
+the registry's built-in table for a system shipped with the package).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Callable, ClassVar, Mapping, NamedTuple
+
+from ..errors import InvalidInputError
+
+if TYPE_CHECKING:  # pragma: no cover
+    import numpy as np
+
+    from ..core.drift import Drift
+    from ..scenes.schema import Scene
+    from ..scenes.units import Scaled
+
+__all__ = ["Key", "Quantity", "Solved", "OutOfReach", "System", "Derivation"]
+
+
+@dataclass(frozen=True)
+class Key:
+    """One scene key of ``[parameters]`` or ``[initial]``.
+
+    ``size`` is 0 for a number, n for a list of n numbers (``omega = [w1, w2, w3]``); ``default``
+    is used when the key is absent and ``required`` is False (None: absent stays absent).
+    ``scales_as`` says how the key changes when a scene is solved in units of its own motion
+    (:mod:`mechderive.scenes.units`): ``"angle"``, ``"rate"``, ``"moment"``, ``"time"``, or ``""``
+    (not scaled).
+    """
+
+    name: str
+    unit: str
+    meaning: str
+    required: bool = True
+    size: int = 0
+    default: Any = None
+    scales_as: str = ""
+
+
+@dataclass(frozen=True)
+class Quantity:
+    """One output column: its name, unit (SI; ``"rad"``, ``"rad/s"``, ``"1"``) and a one-line meaning."""
+
+    name: str
+    unit: str
+    meaning: str
+    scales_as: str = ""
+
+
+class Solved(NamedTuple):
+    """What :meth:`System.solve` returns: the requested columns (in the scene's order), the report's
+    ``details`` (must hold ``error_estimate``: a float measured on the run, or None) and the solved
+    object (a closed-form solution or a trajectory)."""
+
+    columns: dict
+    info: dict
+    solution: Any
+
+
+class OutOfReach(InvalidInputError):
+    """A closed form cannot follow this motion (the message says why); ``method = "auto"`` integrates instead."""
+
+
+@dataclass(frozen=True)
+class Derivation:
+    """One quantity ``derive`` can print: its name, a one-line meaning, the chapter's equation (or ""),
+    and ``build(options)`` returning the SymPy expression, matrix or equation list."""
+
+    name: str
+    meaning: str
+    equation: str
+    build: Callable[[Any], Any]
+
+
+class System:
+    """Base class of every system; a subclass sets the class attributes and overrides the methods.
+
+    The defaults describe a system with no parameters, no initial values and no quantities; the
+    methods a system must provide raise :class:`NotImplementedError`-like :class:`InvalidInputError`
+    naming the system, so a half-built system fails loudly, never silently.
+    """
+
+    #: the scene's ``system = "..."`` value
+    name: ClassVar[str] = ""
+    #: one line: what the system is (``mechderive scenes --systems``)
+    summary: ClassVar[str] = ""
+    #: the chapter's section(s), e.g. "3.6"; "" for a user system
+    section: ClassVar[str] = ""
+    parameters: tuple[Key, ...] = ()
+    initial: tuple[Key, ...] = ()
+    #: True where ``[parameters]`` takes names the system checks itself (the falling cat's)
+    open_parameters: bool = False
+    #: further top-level scene keys and tables the system reads (``configure`` gets them)
+    extra_keys: ClassVar[tuple[str, ...]] = ()
+    quantities: tuple[Quantity, ...] = ()
+    #: solvers, ``"exact"`` first where a closed form exists
+    methods: tuple[str, ...] = ("integrate",)
+    #: peak bytes a solve needs per output sample (the schema's memory guard)
+    bytes_per_sample: int = 600
+
+    # --- the scene schema -------------------------------------------------------------------------
+
+    def configure(self, definition: Mapping[str, Any]) -> "System":
+        """The concrete system a scene defines with the keys of :attr:`extra_keys` (``definition``);
+        a built-in system has none and returns itself."""
+        if definition:
+            raise InvalidInputError(f"system {self.name!r} takes no keys {', '.join(sorted(definition))}")
+        return self
+
+    def quantity_names(self) -> tuple[str, ...]:
+        return tuple(q.name for q in self.quantities)
+
+    def check_parameters(self, given: Mapping[str, Any], *, strict: bool = True) -> dict[str, Any]:
+        """The ``[parameters]`` values, checked (numbers finite, bodies physical unless ``strict`` is
+        False); raises :class:`InvalidInputError` naming the key, what it is and what is allowed."""
+        return dict(given)
+
+    def check_initial(self, given: Mapping[str, Any], parameters: Mapping[str, Any]) -> dict[str, Any]:
+        """The ``[initial]`` values, checked, with defaults filled in."""
+        return dict(given)
+
+    def waived(self, parameters: Mapping[str, Any]) -> list[str]:
+        """The physical conditions a ``strict = false`` scene's parameters break (empty if none)."""
+        return []
+
+    # --- solving --------------------------------------------------------------------------------
+
+    def scale(self, scene: "Scene") -> "Scaled":
+        """The scene in units of its own motion (exact powers of two); the default keeps the scene's units."""
+        from ..scenes.units import Scaled
+
+        return Scaled(scene, scene)
+
+    def solve(self, scene: "Scene", method: str, t: "np.ndarray") -> Solved:
+        """Solve ``scene`` by ``method`` (one of :attr:`methods`) at the times ``t``, computing only
+        what ``scene.quantities`` need."""
+        raise InvalidInputError(f"system {self.name!r} has no solver")
+
+    def drift(self, scene: "Scene", solved: Solved, t: "np.ndarray") -> dict[str, "Drift"]:
+        """The drift of each conserved quantity along the solution, each against a scale of the motion."""
+        return {}
+
+    # --- derive, check, plot ----------------------------------------------------------------------
+
+    def derivations(self) -> tuple[Derivation, ...]:
+        """What ``mechderive derive`` can print for this system."""
+        return ()
+
+    def check_system(self) -> Any:
+        """The :class:`mechderive.formulas.systems.System` that ``mechderive check`` uses, or None."""
+        return None
+
+    def plot(self, result: Any, figure: Any) -> bool:
+        """Draw ``result`` (a :class:`~mechderive.scenes.planner.RunResult`) on ``figure``; False where the
+        system has no picture of its own (the generic plot of the columns against t is used)."""
+        return False
+
+    def example_scene(self) -> str:
+        """A complete scene file (TOML) of this system: the default of ``mechderive run``'s built-ins."""
+        return ""
+
+    def __repr__(self) -> str:
+        return f"<system {self.name!r}>"
