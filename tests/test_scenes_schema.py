@@ -207,7 +207,7 @@ def test_scene_is_frozen():
     (heavy(parameters=3), InvalidInputError, r"scene table \[parameters\]: expected a table, got 3"),
     (heavy(time=[1, 2]), InvalidInputError, r"scene table \[time\]: expected a table, got \[1, 2\]"),
     (heavy(system="pendulum"), InvalidInputError,
-     r"scene key system: expected one of 'free_top', 'heavy_top', 'falling_cat', got 'pendulum'"),
+     r"scene key system: expected one of 'free_top', 'heavy_top', 'falling_cat', 'rigid_body', 'lagrangian', got 'pendulum'"),
     (heavy(system={"x": 1}), InvalidInputError, r"scene key system: expected one of .*, got a table"),
     (heavy(method="fast"), InvalidInputError,
      r"scene key method: expected one of 'auto', 'exact', 'integrate', got 'fast'"),
@@ -463,7 +463,7 @@ def test_scene_files_are_data_nothing_in_them_is_evaluated(tmp_path, monkeypatch
         load_scene(as_quantity)
     as_system = HEAVY.replace('system = "heavy_top"', f"system = {schema._toml_string(payload)}")
     with pytest.raises(InvalidInputError, match=r"scene key system: expected one of 'free_top', 'heavy_top', "
-                                                r"'falling_cat', got \"__import__"):
+                                                r"'falling_cat', 'rigid_body', 'lagrangian', got \"__import__"):
         load_scene(as_system)
     as_key = HEAVY.replace("I1 = 1.0", f"{schema._toml_string(payload)} = 1.0")
     with pytest.raises(InvalidInputError, match=r"scene key \[parameters\]\.\"__import__.*: unknown parameter"):
