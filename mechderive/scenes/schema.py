@@ -91,6 +91,7 @@ from typing import Any, Callable, Iterable, Mapping
 import numpy as np
 
 from ..errors import InvalidInputError, NonFiniteValueError
+from ..systems import registry
 from ..systems.heavy_top import parameters as heavy_top_parameters
 
 __all__ = [
@@ -481,9 +482,7 @@ class SizeEstimate:
         if system in _SOLVE_BYTES_PER_SAMPLE:
             per_sample = _SOLVE_BYTES_PER_SAMPLE[system]
         else:
-            from ..systems import registry
-
-            per_sample = registry.get(system).bytes_per_sample
+                per_sample = registry.get(system).bytes_per_sample
         return cls(samples, columns, values, 8 * values, _CSV_BYTES_PER_VALUE * values,
                    samples * per_sample + _BYTES_PER_VALUE * values)
 
@@ -560,8 +559,6 @@ class Scene:
 
     def _post_init_registered(self) -> None:
         """Check the fields of a scene of a registered system through the system itself."""
-        from ..systems import registry
-
         set_ = object.__setattr__
         system = registry.get(self.system) if isinstance(self.system, str) else _choice("system", self.system,
                                                                                          registry.names())
@@ -643,8 +640,6 @@ method, rtol, strict and tables [parameters], [initial], [time], [output]
 
 
 def _parse_registered(mapping: Mapping[str, Any], name: str | None) -> Scene:
-    from ..systems import registry
-
     system = registry.get(mapping["system"]) if mapping["system"] in registry.names() else _choice(
         "system", mapping["system"], registry.names())
     extra = tuple(system.extra_keys)
