@@ -215,7 +215,8 @@ def integrate_body(body: Body, initial: dict, t: np.ndarray, rtol: float, *, nee
         q = tr.y[:, 3:7]
         norm = np.linalg.norm(q, axis=-1, keepdims=True)
         q = q / norm
-        return tr.y[:, :3], q, euler_angles_from_half_angles(q, tr.args), float(np.max(np.abs(norm - 1.0)))
+        return tr.y[:, :3], q, euler_angles_from_half_angles(q, _sleeping_split(q, tr.args)), \
+            float(np.max(np.abs(norm - 1.0)))
 
     def run(tol: float) -> dict:
         main = one(tol)
@@ -243,6 +244,22 @@ def integrate_body(body: Body, initial: dict, t: np.ndarray, rtol: float, *, nee
             "quaternion_norm_drift": norm_drift}
     return Motion(t=t, omega=w, R=quaternion_to_matrix(q), quaternion=q, angles=ang, estimates=r["estimates"],
                   info=info, solution=main)
+
+
+def _sleeping_split(q: np.ndarray, args: np.ndarray) -> np.ndarray:
+    """(σ, δ) with ψ carrying the whole turn where only φ + ψ (or φ - ψ) exists along the entire run.
+
+    A body that stays exactly at θ = 0 (q1 = q2 = 0 throughout) turns by φ + ψ only, and the tracker
+    would share it equally between φ and ψ; the spin about e3 is ψ's (the heavy top's closed form and
+    (3.63): ψ̇ = ω3, φ̇ = 0 there), so φ is kept at φ0: δ - δ0 = -(σ - σ0).  At θ = π (q0 = q3 = 0
+    throughout) likewise σ - σ0 = -(δ - δ0).
+    """
+    out = np.array(args, dtype=float, copy=True)
+    if not np.any(q[:, 1:3]):
+        out[:, 1] = args[0, 1] - (args[:, 0] - args[0, 0])
+    elif not np.any(q[:, [0, 3]]):
+        out[:, 0] = args[0, 0] - (args[:, 1] - args[0, 1])
+    return out
 
 
 # --- closed forms --------------------------------------------------------------------------------
