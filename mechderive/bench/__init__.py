@@ -9,7 +9,9 @@ Five measurements (see each module's docstring for the case and what is timed):
 3. ensemble throughput of the vectorised splitting (:mod:`.ensemble`);
 4. cold start of ``mechderive run`` by stage in fresh processes, cold and warm disk cache
    (:mod:`.startup`);
-5. the time saved by laziness (a scene asking for ``u`` only against one asking for everything).
+5. the time saved by laziness (a scene asking for ``u`` only against one asking for everything);
+6. one's own body through the user path (:mod:`.rigid_body`): an asymmetric heavy top as a ``rigid_body``
+   scene against the same body written by hand with ``sympy.physics.mechanics`` → ``solve_ivp``.
 
 :func:`check_targets` compares them with the issue's targets (:mod:`.report`).  ``quick=True``:
 10 periods, fewer rows, M ≤ 100, no cache-disabled runs, and section 5 only when asked for.  Nothing here is a test: figures are
@@ -31,7 +33,7 @@ from .report import check_targets, format_report, plot_work_precision
 
 __all__ = ["run_benchmarks", "format_report", "plot_work_precision", "check_targets", "SECTIONS"]
 
-SECTIONS = ("heavy_top", "free_top", "ensemble", "cold_start", "laziness")
+SECTIONS = ("heavy_top", "free_top", "ensemble", "cold_start", "laziness", "rigid_body")
 
 
 def _versions() -> dict:
@@ -97,6 +99,12 @@ def run_benchmarks(*, quick: bool = False, sections: tuple[str, ...] | None = No
         say("ensembles: throughput ...")
         result["ensemble"] = ensemble_throughput(quick=quick)
         lap("ensemble")
+    if "rigid_body" in sections:
+        from .rigid_body import rigid_body_work_precision
+
+        say("rigid_body scene: asymmetric heavy top, user path vs sympy.physics.mechanics ...")
+        result["rigid_body"] = rigid_body_work_precision(quick=quick, repeat=repeat)
+        lap("rigid_body")
     if "cold_start" in sections or "laziness" in sections:
         from .startup import cold_start, laziness
 

@@ -151,6 +151,7 @@ def invariants(body: Body, omega: np.ndarray, R: np.ndarray) -> tuple[np.ndarray
     return E, Lv
 
 
+@functools.lru_cache(maxsize=256)
 def conserved_axial(body: Body) -> tuple[bool, bool, bool]:
     """Which L_a = I_a ω_a the equations conserve for this body: those whose derived rate
     (:attr:`.model.RigidBodyModel.axial_momentum_rates`) vanishes — exactly, in floating point,
