@@ -59,11 +59,12 @@ def run_benchmarks(*, quick: bool = False, sections: tuple[str, ...] | None = No
                    log: Callable[[str], None] | None = None) -> dict:
     """Run the benchmark ``sections`` and return every figure as plain data (JSON-ready), with the targets.
 
-    ``sections`` defaults to all of :data:`SECTIONS`, except ``laziness`` when ``quick`` (it needs a
-    cold derivation of every heavy-top quantity, ~5-10 s; name it to have it anyway).
+    ``sections`` defaults to all of :data:`SECTIONS`, except ``laziness`` and ``rigid_body`` when ``quick``
+    (the first needs a cold derivation of every heavy-top quantity, ~5-10 s, the second the baseline's
+    derivation with ``sympy.physics.mechanics``, ~3 s; name them to have them anyway).
     """
     if sections is None:
-        sections = tuple(s for s in SECTIONS if not (quick and s == "laziness"))
+        sections = tuple(s for s in SECTIONS if not (quick and s in ("laziness", "rigid_body")))
     unknown = [s for s in sections if s not in SECTIONS]
     if unknown:
         raise InvalidInputError(f"expected sections among {', '.join(SECTIONS)}, got {unknown[0]!r}")

@@ -28,8 +28,8 @@ Symbols: ``I1 I2 I3`` (those of :mod:`mechderive.systems.free_top.model`), ``M``
 ``c1 c2 c3`` (m), ``omega1..3`` (rad/s), ``q0..q3``, ``R11..R33``, ``tau1..3`` (the applied torque, N m).
 
 >>> m = model()
->>> m.torque_generic.T
-Matrix([[M*g*(R23*c3 - R33*c2), M*g*(-R13*c3 + R33*c1), M*g*(R13*c2 - R23*c1)]])
+>>> m.torque_generic.T                              # M g γ × c, γ = (R13, R23, R33)
+Matrix([[M*R23*c3*g - M*R33*c2*g, -M*R13*c3*g + M*R33*c1*g, M*R13*c2*g - M*R23*c1*g]])
 >>> m.invariant_rates                               # d/dt of (E, L·ẽ3) along the equations, τ_applied = 0
 (0, 0)
 """
@@ -115,7 +115,7 @@ class RigidBodyModel(SymbolicModel):
     def torque_generic(self) -> sp.Matrix:
         """The gravity torque for a generic R, after checking that both derivations agree."""
         _expect_zero(self.torque_from_potential - self.torque_from_force, "τ(potential) - τ(force)")
-        return self.torque_from_force
+        return self.torque_from_force.applyfunc(sp.expand)
 
     # --- orientation from the quaternion -----------------------------------------------------
 

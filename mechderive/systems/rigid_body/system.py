@@ -376,7 +376,7 @@ def rigid_body(I1: float, I2: float, I3: float, M: float = 0.0, g: float = 9.81,
     strings, the body components of an applied torque (see :mod:`.torque`); ``strict=False``
     accepts moments no rigid body has.  Checked at once (same rules and messages as a scene's).
 
-    >>> top = rigid_body(1.0, 2.0, 3.0, M=1.0, center_of_mass=(0.1, 0.0, 0.5))
+    >>> top = rigid_body(2.0, 3.0, 4.0, M=1.0, center_of_mass=(0.1, 0.0, 0.5))
     >>> top.methods, top.values["g"]
     (('exact', 'integrate'), 9.81)
     >>> sorted(top.scene_mapping({"omega": [0, 0, 20]}, t_end=1.0, samples=11, quantities=["omega1"]))[:3]
