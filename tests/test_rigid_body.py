@@ -57,6 +57,18 @@ def test_heavy_symmetric_top_closed_form_agrees_with_integration():
     assert set(num.report["drift"]) == {"energy", "L_vertical", "p_psi"} and num.report["drift"]["p_psi"] == 0.0
 
 
+@pytest.mark.parametrize("theta", [math.pi, 1e-9])
+def test_heavy_top_at_the_poles_closed_form_agrees_with_integration(theta):
+    # at θ = π exactly (hanging) the Euler rates of (3.58) divide by sin(fl(π)) ~ 1e-16: the closed form must
+    # still agree with the integration of (ω, q), which has no singularity there
+    body = rigid_body(1.0, 1.0, 0.5, M=0.1, g=10.0, center_of_mass=(0.0, 0.0, 1.0))
+    q = ["omega1", "omega2", "omega3", "R13", "R23", "R33", "theta", "energy", "L_vertical"]
+    init = {"omega": [0.1, 0.0, 3.0], "theta": theta}
+    exact, num = _run(body, init, quantities=q), _run(body, init, quantities=q, method="integrate")
+    assert exact.report["method"] == "exact" and exact.report["rtol_met"] and num.report["rtol_met"]
+    _agree(exact, num, 10 * (exact.report["error_estimate"] + num.report["error_estimate"]))
+
+
 def test_symmetric_top_with_centre_of_mass_below_pivot_is_integrated_and_says_why():
     body = rigid_body(1.0, 1.0, 0.5, M=0.1, g=10.0, center_of_mass=(0.0, 0.0, -1.0))
     r = _run(body, {"omega": [0.0, 0.0, 5.0], "theta": 0.5}, quantities=["theta"])

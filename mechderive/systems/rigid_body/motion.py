@@ -371,7 +371,9 @@ def families(names: tuple[str, ...]) -> tuple[str, ...]:
             fam = ("rotation",)
         elif q in ("q0", "q1", "q2", "q3"):
             fam = ("rotation", "quaternion")
-        elif q in ("phi", "theta", "psi"):
+        elif q == "theta":  # from R, as well conditioned as R: |Δθ| ≤ the rotation angle between R and R_exact
+            fam = ("rotation",)
+        elif q in ("phi", "psi"):
             fam = ("euler",)
         else:  # energy, L_vertical: from ω and R
             fam = ("omega", "rotation")
@@ -397,7 +399,11 @@ def columns(names: tuple[str, ...], motion: Motion, body: Body) -> dict[str, np.
             out[q] = motion.R[:, 2, "xyz".index(q[-1])]
         elif q in ("q0", "q1", "q2", "q3"):
             out[q] = motion.quaternion[:, int(q[1])]
-        elif q in ("phi", "theta", "psi"):
+        elif q == "theta":
+            # θ = arccos R33 ∈ [0, π], as atan2(√(R13² + R23²), R33): accurate at 0 and π alike
+            R = motion.R
+            out[q] = np.arctan2(np.hypot(R[:, 0, 2], R[:, 1, 2]), R[:, 2, 2])
+        elif q in ("phi", "psi"):
             out[q] = motion.angles[:, ("phi", "theta", "psi").index(q)]
         elif q in ("energy", "L_vertical"):
             if inv is None:
