@@ -9,7 +9,9 @@ Five measurements (see each module's docstring for the case and what is timed):
 3. ensemble throughput of the vectorised splitting (:mod:`.ensemble`);
 4. cold start of ``mechderive run`` by stage in fresh processes, cold and warm disk cache
    (:mod:`.startup`);
-5. the time saved by laziness (a scene asking for ``u`` only against one asking for everything).
+5. the time saved by laziness (a scene asking for ``u`` only against one asking for everything);
+6. one's own body through the user path (:mod:`.rigid_body`): an asymmetric heavy top as a ``rigid_body``
+   scene against the same body written by hand with ``sympy.physics.mechanics`` → ``solve_ivp``.
 
 :func:`check_targets` compares them with the issue's targets (:mod:`.report`).  ``quick=True``:
 10 periods, fewer rows, M ≤ 100, no cache-disabled runs, and section 5 only when asked for.  Nothing here is a test: figures are
@@ -31,7 +33,7 @@ from .report import check_targets, format_report, plot_work_precision
 
 __all__ = ["run_benchmarks", "format_report", "plot_work_precision", "check_targets", "SECTIONS"]
 
-SECTIONS = ("heavy_top", "free_top", "ensemble", "cold_start", "laziness")
+SECTIONS = ("heavy_top", "free_top", "ensemble", "cold_start", "laziness", "rigid_body")
 
 
 def _versions() -> dict:
@@ -57,11 +59,12 @@ def run_benchmarks(*, quick: bool = False, sections: tuple[str, ...] | None = No
                    log: Callable[[str], None] | None = None) -> dict:
     """Run the benchmark ``sections`` and return every figure as plain data (JSON-ready), with the targets.
 
-    ``sections`` defaults to all of :data:`SECTIONS`, except ``laziness`` when ``quick`` (it needs a
-    cold derivation of every heavy-top quantity, ~5-10 s; name it to have it anyway).
+    ``sections`` defaults to all of :data:`SECTIONS`, except ``laziness`` and ``rigid_body`` when ``quick``
+    (the first needs a cold derivation of every heavy-top quantity, ~5-10 s, the second the baseline's
+    derivation with ``sympy.physics.mechanics``, ~3 s; name them to have them anyway).
     """
     if sections is None:
-        sections = tuple(s for s in SECTIONS if not (quick and s == "laziness"))
+        sections = tuple(s for s in SECTIONS if not (quick and s in ("laziness", "rigid_body")))
     unknown = [s for s in sections if s not in SECTIONS]
     if unknown:
         raise InvalidInputError(f"expected sections among {', '.join(SECTIONS)}, got {unknown[0]!r}")
@@ -97,6 +100,12 @@ def run_benchmarks(*, quick: bool = False, sections: tuple[str, ...] | None = No
         say("ensembles: throughput ...")
         result["ensemble"] = ensemble_throughput(quick=quick)
         lap("ensemble")
+    if "rigid_body" in sections:
+        from .rigid_body import rigid_body_work_precision
+
+        say("rigid_body scene: asymmetric heavy top, user path vs sympy.physics.mechanics ...")
+        result["rigid_body"] = rigid_body_work_precision(quick=quick, repeat=repeat)
+        lap("rigid_body")
     if "cold_start" in sections or "laziness" in sections:
         from .startup import cold_start, laziness
 

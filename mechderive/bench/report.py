@@ -68,6 +68,13 @@ def check_targets(result: dict) -> list[dict]:
                           f"({r['max_error']:.1e}, {_seconds(r['seconds'])})")
         out.append(dict(target="our integrator ≥ 10× faster than the baseline at equal error", met=met,
                         figures="; ".join(ratios)))
+    if result.get("rigid_body"):
+        from .rigid_body import equal_error_speedups
+
+        met, lines = equal_error_speedups(result["rigid_body"])
+        out.append(dict(target="a rigid_body scene (asymmetric heavy top, whole user path) ≥ 50× faster than "
+                               "sympy.physics.mechanics → lambdify → solve_ivp at equal error", met=met,
+                        figures="; ".join(lines)))
     cold = result.get("cold_start")
     if cold:
         w = cold["warm"]
@@ -172,7 +179,13 @@ def format_report(result: dict) -> str:
                          f"{ut['derive'] + ut['compile'] + ut['solve']:.3f} s vs "
                          f"{at['derive'] + at['compile'] + at['solve']:.3f} s")
         L.append("")
-    skipped = [s for s in ("heavy_top", "free_top", "ensemble", "cold_start", "laziness") if s not in result]
+    rb = result.get("rigid_body")
+    if rb:
+        from .rigid_body import report_lines
+
+        L += report_lines(rb, _wp_table)
+    skipped = [s for s in ("heavy_top", "free_top", "ensemble", "cold_start", "laziness", "rigid_body")
+               if s not in result]
     if skipped:
         L += [f"Not run: {', '.join(skipped)} (see --only; --quick leaves out laziness).", ""]
     targets = result.get("targets", [])
