@@ -50,6 +50,9 @@ _PUBLIC = {
     "DeformableBody": "mechderive.systems.deformable",
     "net_rotation": "mechderive.systems.deformable",
     "run_claims": "mechderive.catalog.registry",
+    "System": "mechderive.systems.base",
+    "register_system": "mechderive.systems.registry",
+    "rigid_body": "mechderive.systems.rigid_body.system",
 }
 
 __all__ = sorted(_PUBLIC) + ["__version__"]

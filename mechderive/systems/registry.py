@@ -17,7 +17,7 @@ import threading
 from ..errors import InvalidInputError
 from .base import System
 
-__all__ = ["register", "unregister", "get", "names"]
+__all__ = ["register", "register_system", "unregister", "get", "names"]
 
 #: built-in system name -> module whose ``SYSTEM`` attribute is the system (imported on first use)
 _BUILTIN = {
@@ -47,6 +47,10 @@ def register(system: System, *, replace: bool = False) -> System:
             raise InvalidInputError(f"system {name!r} is already registered; pass replace=True to replace it")
         _LOADED[name] = system
     return system
+
+
+#: the public name of :func:`register` (``mechderive.register_system``)
+register_system = register
 
 
 def unregister(name: str) -> None:
