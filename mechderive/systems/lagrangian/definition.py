@@ -241,12 +241,17 @@ def _parse_expressions(table: Any, coordinates: tuple[str, ...], parameters: lis
     return out
 
 
+def _is_time(args: tuple) -> bool:
+    """Whether ``args`` is (t,): the time symbol of any assumptions (``dynamicsymbols`` use a plain t)."""
+    return len(args) == 1 and isinstance(args[0], sp.Symbol) and args[0].name == "t"
+
+
 def _as_name(value: Any, what: str) -> str:
     if isinstance(value, str):
         return value
     if isinstance(value, sp.Symbol):
         return value.name
-    if isinstance(value, sp.core.function.AppliedUndef) and value.args == (TIME,):
+    if isinstance(value, sp.core.function.AppliedUndef) and _is_time(value.args):
         return value.func.__name__
     raise InvalidInputError(f"expected each {what} as a name, a SymPy Symbol or a function of t like q(t), "
                             f"got {_show(value)}")
@@ -283,14 +288,14 @@ def from_objects(lagrangian: Any, coordinates: Sequence[Any], parameters: Sequen
     subs: dict[Any, Any] = {}
     for d in L.atoms(sp.Derivative):
         name = _as_name(d.expr, "coordinate") if isinstance(d.expr, sp.core.function.AppliedUndef) else None
-        if name in coords and d.variables == (TIME,):
+        if name in coords and _is_time(d.variables):
             subs[d] = state_symbol(name + "_dot")
         else:
             raise _fail("lagrangian", f"expected at most first time derivatives of the coordinates, got {d}")
     L = L.xreplace(subs)
     for f in L.atoms(sp.core.function.AppliedUndef):
         name = f.func.__name__
-        if name in coords and f.args and len(f.args) == 1 and f.args[0].is_Symbol and f.args[0].name == "t":
+        if name in coords and _is_time(f.args):
             subs[f] = state_symbol(name)
         else:
             raise _fail("lagrangian", f"expected functions of t only for the coordinates ({', '.join(coords)}), "

@@ -120,6 +120,10 @@ class LagrangianSystem(System):
 
         d = self.definition
         names = set(d.coordinates) | {q + "_dot" for q in d.coordinates}
+        unused = [k for k in given if k not in d.parameters]
+        for p in d.parameters:
+            if p not in given:
+                raise InvalidInputError(self._unknown_symbol(p, unused))
         for key in given:
             where = f"scene key [parameters].{key}"
             if key in RESERVED:
@@ -132,14 +136,9 @@ class LagrangianSystem(System):
                 used = ", ".join(d.parameters) or "none"
                 raise InvalidInputError(f"{where}: unknown key; expected the parameters the Lagrangian and the "
                                         f"expressions use ({used})")
-        for p in d.parameters:
-            if p not in given:
-                raise InvalidInputError(self._unknown_symbol(p))
         return {p: _number(f"[parameters].{p}", given[p]) for p in d.parameters}
 
-    def _unknown_symbol(self, name: str) -> str:
-        import sympy as sp
-
+    def _unknown_symbol(self, name: str, unused: Sequence[str]) -> str:
         from .definition import parameter_symbol
 
         d = self.definition
@@ -149,9 +148,9 @@ class LagrangianSystem(System):
                         e.free_symbols), key)
         coords = ", ".join(d.coordinates)
         vels = ", ".join(q + "_dot" for q in d.coordinates)
-        del sp
+        given = f"; [parameters] has {', '.join(unused)}, which nothing uses" if unused else ""
         return (f"scene key {key}: unknown symbol {name!r}: expected a coordinate ({coords}), a velocity ({vels}), "
-                f"t, or a parameter given in [parameters] (add {name} = <value> there)")
+                f"t, or a parameter given in [parameters] (add {name} = <value> there{given})")
 
     def check_initial(self, given: Mapping[str, Any], parameters: Mapping[str, Any]) -> dict[str, Any]:
         """Every q and q_dot, finite; the mass matrix regular at that state (else the keys it depends on)."""
