@@ -338,3 +338,11 @@ def test_from_lagrangian_refuses_unlisted_symbols_and_text_outside_the_whitelist
         from_lagrangian("eval('1')", ["x"])
     with pytest.raises(InvalidInputError, match=r"not a function, got 'exp'"):
         from_lagrangian("x_dot**2", ["x"], ["exp"])
+
+
+def test_example_definition_is_the_example_scenes():
+    from mechderive.systems.lagrangian.system import EXAMPLE_DEFINITION, SYSTEM
+
+    assert load_scene(EXAMPLE_SCENE).definition == EXAMPLE_DEFINITION
+    assert SYSTEM.example_scene() == EXAMPLE_SCENE
+    assert [d.name for d in SYSTEM.derivations()][:2] == ["lagrangian", "euler_lagrange"]

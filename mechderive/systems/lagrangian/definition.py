@@ -50,7 +50,10 @@ class Definition:
     ``lagrangian`` is L in the state symbols ``q, q_dot`` (:func:`~mechderive.core.symbols.state_symbol`),
     the time symbol t if ``uses_time``, and the parameter symbols (real symbols named as in
     ``parameters``, sorted by name).  ``expressions`` are (name, expression) of the extra outputs, in
-    the same symbols.  ``digest`` is a short hash of all of it: the compiled code's names carry it.
+    the same symbols.  ``digest`` is a short hash of all of it (the output expressions' compiled code
+    carries it); ``dynamics_digest`` one of the coordinates, L and the parameters L uses
+    (``dynamics_parameters``, sorted): the equations of motion's compiled code carries it, so that a
+    new output expression compiles nothing else again.
     """
 
     coordinates: tuple[str, ...]
@@ -60,6 +63,8 @@ class Definition:
     uses_time: bool
     digest: str
     source: str
+    dynamics_parameters: tuple[str, ...] = ()
+    dynamics_digest: str = ""
 
     @property
     def positions(self) -> tuple[sp.Symbol, ...]:
@@ -72,6 +77,10 @@ class Definition:
     @property
     def parameter_symbols(self) -> tuple[sp.Symbol, ...]:
         return tuple(parameter_symbol(p) for p in self.parameters)
+
+    @property
+    def dynamics_symbols(self) -> tuple[sp.Symbol, ...]:
+        return tuple(parameter_symbol(p) for p in self.dynamics_parameters)
 
 
 def parameter_symbol(name: str) -> sp.Symbol:
@@ -194,10 +203,12 @@ def _build(coordinates: tuple[str, ...], L: sp.Expr, parameters: list[str], expr
         if name in parameters:
             raise _fail(f"[output.expressions].{name}", f"expected a name that is not a parameter, got {name!r}")
     parameters = sorted(parameters)
-    text = "\x00".join([",".join(coordinates), sp.srepr(L), ",".join(parameters),
-                        *(f"{n}={sp.srepr(e)}" for n, e in expressions)])
+    dynamics = sorted(p for p in parameters if parameter_symbol(p) in free)
+    text = "\x00".join([",".join(coordinates), sp.srepr(L), ",".join(dynamics)])
+    full = "\x00".join([text, ",".join(parameters), *(f"{n}={sp.srepr(e)}" for n, e in expressions)])
     return Definition(coordinates=coordinates, lagrangian=L, parameters=tuple(parameters),
-                      expressions=tuple(expressions), uses_time=L.has(TIME), digest=_digest(text), source=source)
+                      expressions=tuple(expressions), uses_time=L.has(TIME), digest=_digest(full), source=source,
+                      dynamics_parameters=tuple(dynamics), dynamics_digest=_digest(text))
 
 
 def parse_definition(definition: Mapping[str, Any]) -> Definition:

@@ -9,8 +9,9 @@ A coordinate q_c with ∂L/∂q_c ≡ 0 (decided exactly: absent from L, or a tr
 
 q̈ = M⁻¹ b is obtained in one of two ways (:attr:`LagrangianEquations.solve_kind` says which):
 
-* ``"symbolic"``, for n ≤ :data:`SYMBOLIC_MAX_N` coordinates and M, b of at most
-  :data:`SYMBOLIC_MAX_OPS` operations: SymPy's LU solve, each q̈_i simplified exactly
+* ``"symbolic"``, for n ≤ :data:`SYMBOLIC_MAX_N` coordinates and a Lagrangian of at most
+  :data:`SYMBOLIC_MAX_OPS` operations (decided on L, so that no derivation is needed to know it
+  once the code is compiled): SymPy's LU solve, each q̈_i simplified exactly
   (trigonometric normal form, factored) — the readable equations ``derive`` prints;
 * ``"elimination"`` otherwise: M and b are left as derived and the LU elimination of M q̈ = b is
   generated unsimplified after them (pivots chosen on the structural zeros of M only); the
@@ -43,8 +44,8 @@ __all__ = ["LagrangianEquations", "equations", "SYMBOLIC_MAX_N", "SYMBOLIC_MAX_O
 
 #: Largest number of coordinates whose accelerations are solved for symbolically.
 SYMBOLIC_MAX_N = 3
-#: Largest size (SymPy operation count of M and b together) solved for symbolically.
-SYMBOLIC_MAX_OPS = 1500
+#: Largest Lagrangian (SymPy operation count) whose accelerations are solved for symbolically.
+SYMBOLIC_MAX_OPS = 300
 #: A mass matrix whose condition number exceeds this is refused as singular at that state: the
 #: accelerations would lose all but ~4 of the 16 digits of a double.
 CONDITION_LIMIT = 1e12
@@ -59,12 +60,13 @@ class LagrangianEquations(SymbolicModel):
 
     def __init__(self, definition: Definition) -> None:
         super().__init__()
+        #: the first definition of these dynamics (others differ only in their output expressions)
         self.definition = definition
         self.positions = definition.positions
         self.velocities = definition.velocities
-        self.parameter_symbols = definition.parameter_symbols
+        self.parameter_symbols = definition.dynamics_symbols
         self.functions = tuple(coordinate(q) for q in definition.coordinates)
-        self.name = f"lagrangian_{definition.digest}"
+        self.name = f"lagrangian_{definition.dynamics_digest}"
 
     # --- the derivation ------------------------------------------------------------------------
 
@@ -112,14 +114,12 @@ class LagrangianEquations(SymbolicModel):
                 out.append(name)
         return tuple(out)
 
-    @property
+    @functools.cached_property
     def solve_kind(self) -> str:
         """"symbolic" or "elimination": how q̈ = M⁻¹b is obtained (module docstring)."""
-        n = len(self.positions)
-        if n > SYMBOLIC_MAX_N:
+        if len(self.positions) > SYMBOLIC_MAX_N:
             return "elimination"
-        size = sum(sp.count_ops(e) for e in [*self.mass_matrix, *self.forcing])
-        return "symbolic" if size <= SYMBOLIC_MAX_OPS else "elimination"
+        return "symbolic" if sp.count_ops(self.definition.lagrangian) <= SYMBOLIC_MAX_OPS else "elimination"
 
     @derived
     def accelerations(self) -> sp.Matrix:
@@ -172,11 +172,14 @@ class LagrangianEquations(SymbolicModel):
         """M compiled to NumPy, called as M(*parameters, *q, *q̇, t) -> the n² entries, row-major."""
         return cached_lambdify(f"{self.name}.mass_matrix", lambda: (self._arguments(), self.mass_matrix))[0]
 
-    def expression_function(self) -> Callable[..., list]:
-        """The output expressions compiled to NumPy, called as f(*parameters, *q, *q̇, t) -> list."""
+    def expression_function(self, definition: Definition) -> Callable[..., list]:
+        """The output expressions of ``definition`` (of these dynamics) compiled to NumPy, called as
+        f(*all its parameters, *q, *q̇, t) -> list (an expression may use parameters L does not)."""
+        d = definition
+
         def build() -> tuple:
-            return self._arguments(), [e for _, e in self.definition.expressions]
-        return cached_lambdify(f"{self.name}.expressions", build)[0]
+            return [*d.parameter_symbols, *self.positions, *self.velocities, TIME], [e for _, e in d.expressions]
+        return cached_lambdify(f"lagrangian_{d.digest}.expressions", build)[0]
 
     # --- regularity ------------------------------------------------------------------------------
 
@@ -214,7 +217,16 @@ class LagrangianEquations(SymbolicModel):
         return None
 
 
-@functools.lru_cache(maxsize=64)
+_EQUATIONS: dict[str, LagrangianEquations] = {}
+
+
 def equations(definition: Definition) -> LagrangianEquations:
-    """The (cached) equations of ``definition``."""
-    return LagrangianEquations(definition)
+    """The equations of ``definition``: one derivation per dynamics (coordinates, L, its parameters) in a
+    process, shared by the definitions that differ only in their output expressions."""
+    key = definition.dynamics_digest
+    eq = _EQUATIONS.get(key)
+    if eq is None:
+        if len(_EQUATIONS) >= 64:
+            _EQUATIONS.pop(next(iter(_EQUATIONS)))
+        eq = _EQUATIONS.setdefault(key, LagrangianEquations(definition))
+    return eq

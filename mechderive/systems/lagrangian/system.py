@@ -39,7 +39,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from .definition import Definition
     from .model import LagrangianEquations
 
-__all__ = ["SYSTEM", "LagrangianSystem", "LagrangianFamily", "from_lagrangian", "EXAMPLE_SCENE"]
+__all__ = ["SYSTEM", "LagrangianSystem", "LagrangianFamily", "from_lagrangian", "EXAMPLE_SCENE", "EXAMPLE_DEFINITION"]
 
 EXAMPLE_SCENE = '''\
 # The spherical pendulum from its Lagrangian (theta from the downward vertical).
@@ -64,6 +64,13 @@ quantities = ["theta", "phi", "theta_dot", "phi_dot", "energy", "p_phi", "x"]
 [output.expressions]
 x = "l*sin(theta)*cos(phi)"
 '''
+
+#: the definition of :data:`EXAMPLE_SCENE` (its keys as :meth:`LagrangianFamily.configure` gets them)
+EXAMPLE_DEFINITION = {
+    "coordinates": ["theta", "phi"],
+    "lagrangian": "m*l**2/2*(theta_dot**2 + sin(theta)**2*phi_dot**2) + m*g*l*cos(theta)",
+    "output.expressions": {"x": "l*sin(theta)*cos(phi)"},
+}
 
 _SUMMARY = "any holonomic system from its Lagrangian L(q, q_dot, t): derived, compiled, integrated"
 
@@ -171,7 +178,7 @@ class LagrangianSystem(System):
         import numpy as np
 
         d, eq = self.definition, self.equations
-        p = [parameters[n] for n in d.parameters]
+        p = [parameters[n] for n in d.dynamics_parameters]
         q = [initial[n] for n in d.coordinates]
         v = [initial[n + "_dot"] for n in d.coordinates]
         M = eq.mass_at(p, q, v, 0.0)
@@ -203,12 +210,11 @@ class LagrangianSystem(System):
 
     def solve(self, scene: "Scene", method: str, t: "np.ndarray") -> Solved:
         """Integrate from the scene's initial state; only the requested expressions are evaluated."""
-        import numpy as np
-
         from ...solvers.driver import integrate, integrate_to_rtol
 
         d, eq = self.definition, self.equations
-        p = [scene.parameters[n] for n in d.parameters]
+        p = [scene.parameters[n] for n in d.dynamics_parameters]
+        p_all = [scene.parameters[n] for n in d.parameters]
         y0 = ([scene.initial[q] for q in d.coordinates] + [scene.initial[q + "_dot"] for q in d.coordinates]
               + ([float(t[0])] if d.uses_time else []))
         wanted = tuple(scene.quantities)
@@ -218,10 +224,10 @@ class LagrangianSystem(System):
             return integrate(term, y0, t, p, rtol=tol)
 
         def estimate(tr: Any) -> float | None:
-            return self._error_estimate(tr, wanted, p)
+            return self._error_estimate(tr, wanted, p, p_all)
 
         traj, attempts = integrate_to_rtol(run, estimate, scene.rtol)
-        columns = self._columns(traj, wanted, p)
+        columns = self._columns(traj, wanted, p_all)
         info = {
             "error_estimate": attempts[-1]["error_estimate"],
             "error_estimate_kind": (f"{traj.error_estimate_kind}, absolute, in the outputs' units (energy, p_<q> "
@@ -237,10 +243,9 @@ class LagrangianSystem(System):
             "attempts": attempts,
             "definition": d.digest,
         }
-        del np
         return Solved({q: columns[q] for q in wanted}, info, traj)
 
-    def _columns(self, traj: Any, wanted: Sequence[str], p: Sequence[float]) -> dict:
+    def _columns(self, traj: Any, wanted: Sequence[str], p_all: Sequence[float]) -> dict:
         import numpy as np
 
         d = self.definition
@@ -253,7 +258,7 @@ class LagrangianSystem(System):
                 cols[name] = traj.invariant(name)
         expr_names = [e for e, _ in d.expressions]
         if any(w in expr_names for w in wanted):
-            vals = self._expressions(p, traj.y, traj.t)
+            vals = self._expressions(p_all, traj.y, traj.t)
             cols.update({e: v for e, v in zip(expr_names, vals)})
         return {k: np.ascontiguousarray(v, dtype=float) for k, v in cols.items() if k in wanted}
 
@@ -262,10 +267,11 @@ class LagrangianSystem(System):
 
         n = len(self.definition.coordinates)
         with np.errstate(all="ignore"):
-            vals = self.equations.expression_function()(*p, *y[:, :2 * n].T, t)
+            vals = self.equations.expression_function(self.definition)(*p, *y[:, :2 * n].T, t)
         return [np.broadcast_to(np.asarray(v, dtype=float), t.shape) for v in vals]
 
-    def _error_estimate(self, traj: Any, wanted: Sequence[str], p: Sequence[float]) -> float | None:
+    def _error_estimate(self, traj: Any, wanted: Sequence[str], p: Sequence[float],
+                        p_all: Sequence[float]) -> float | None:
         """The largest estimated error of the requested outputs: the state's distance to the tighter rerun,
         and, for a function f of the state, Σ_i |f(y + δ_i e_i) − f(y)| with δ_i component i's distance."""
         import numpy as np
@@ -293,7 +299,7 @@ class LagrangianSystem(System):
                 rows += [np.broadcast_to(np.asarray(vals[traj.invariant_names.index(q)], float), t.shape)
                          for q in invariants]
             if expressions:
-                vals = self._expressions(p, y, t)
+                vals = self._expressions(p_all, y, t)
                 rows += [vals[expr_names.index(q)] for q in expressions]
             return np.array(rows)
 
@@ -457,12 +463,7 @@ class LagrangianFamily(System):
         return _cached(parse_definition(definition), self.name)
 
     def _example(self) -> LagrangianSystem:
-        import tomllib
-
-        doc = tomllib.loads(EXAMPLE_SCENE)
-        definition = {k: doc[k] for k in ("coordinates", "lagrangian")}
-        definition["output.expressions"] = doc["output"]["expressions"]
-        return self.configure(definition)
+        return self.configure(EXAMPLE_DEFINITION)
 
     def derivations(self) -> tuple[Derivation, ...]:
         """Those of the example scene (the spherical pendulum); a scene's own come from its configured system."""
