@@ -346,3 +346,16 @@ def test_example_definition_is_the_example_scenes():
     assert load_scene(EXAMPLE_SCENE).definition == EXAMPLE_DEFINITION
     assert SYSTEM.example_scene() == EXAMPLE_SCENE
     assert [d.name for d in SYSTEM.derivations()][:2] == ["lagrangian", "euler_lagrange"]
+
+
+def test_elimination_refuses_a_vanishing_pivot_and_names_the_fix():
+    # M = [[sin q1, 1], [1, sin q1]] ⊕ 1 ⊕ 1 is regular at q1 = 0 (cond 1), but the generated elimination,
+    # which follows the coordinates' order, would divide by its first pivot sin q1 = 0
+    text = _scene(coords='["q1", "q2", "q3", "q4"]',
+                  lagrangian="sin(q1)*(q1_dot**2 + q2_dot**2)/2 + q1_dot*q2_dot + (q3_dot**2 + q4_dot**2)/2 - q1**2",
+                  parameters="", initial="\n".join(f"q{i} = 0.0\nq{i}_dot = 0.0" for i in range(1, 5)),
+                  quantities='["q1"]')
+    with pytest.raises(InvalidInputError, match=r"^scene key \[initial\]\.q1: .* eliminated with too small a pivot "
+                                                r"\(0 of the largest entry.*list them in another order"):
+        load_scene(text)
+    load_scene(text.replace("q1 = 0.0", "q1 = 0.5"))

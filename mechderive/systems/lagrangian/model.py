@@ -18,8 +18,9 @@ q̈ = M⁻¹ b is obtained in one of two ways (:attr:`LagrangianEquations.solve_
   generated code (C or NumPy, common subexpressions shared) evaluates the numbers of M and b at
   each step and eliminates them — a compiled numeric solve, O(n³) per step, with no symbolic
   inverse.  Without numeric pivoting this is the stable LDLᵀ elimination when M is definite (a
-  kinetic energy); :func:`LagrangianEquations.check_regular_at` refuses a state where a pivot
-  nearly vanishes.
+  kinetic energy); for an indefinite M a pivot may vanish where M does not: the initial state is
+  refused then (:meth:`LagrangianEquations.pivot_function`), and a motion through such a state
+  stops with an :class:`~mechderive.errors.IntegrationError`.
 """
 
 from __future__ import annotations
@@ -180,6 +181,14 @@ class LagrangianEquations(SymbolicModel):
         def build() -> tuple:
             return [*d.parameter_symbols, *self.positions, *self.velocities, TIME], [e for _, e in d.expressions]
         return cached_lambdify(f"lagrangian_{d.digest}.expressions", build)[0]
+
+    def pivot_function(self) -> Callable[..., list]:
+        """The pivots of the generated elimination (the diagonal of U in M = P L U with the same structural
+        row exchanges), compiled to NumPy, called as f(*parameters, *q, *q̇, t)."""
+        def build() -> tuple:
+            _, U, _ = self.mass_matrix.LUdecomposition(iszerofunc=_structural_zero)
+            return self._arguments(), [U[k, k] for k in range(U.rows)]
+        return cached_lambdify(f"{self.name}.pivots", build)[0]
 
     # --- regularity ------------------------------------------------------------------------------
 

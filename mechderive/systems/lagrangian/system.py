@@ -190,10 +190,12 @@ class LagrangianSystem(System):
             if not cond <= eq_limit():
                 problem = f"singular (condition number {cond:.3g} > {eq_limit():.0e})"
             elif eq.solve_kind == "elimination":
-                piv = _pivots(M)
-                if piv is not None and piv < 1.0 / eq_limit():
-                    problem = (f"too small a pivot ({piv:.3g} of the largest entry) for the compiled elimination, "
-                               "which follows the coordinates' order: list the coordinates in another order")
+                with np.errstate(all="ignore"):
+                    pivots = np.abs(np.array(eq.pivot_function()(*p, *q, *v, 0.0), dtype=float))
+                smallest = float(np.min(pivots)) / float(np.max(np.abs(M)))
+                if not smallest >= 1.0 / eq_limit():
+                    problem = (f"eliminated with too small a pivot ({smallest:.3g} of the largest entry: the compiled "
+                               "elimination follows the coordinates' order; list them in another order)")
         if problem is None:
             return
         free = {s.name for s in eq.mass_matrix.free_symbols}
@@ -387,29 +389,6 @@ def eq_limit() -> float:
     from .model import CONDITION_LIMIT
 
     return CONDITION_LIMIT
-
-
-def _pivots(M: "np.ndarray") -> float | None:
-    """The smallest |pivot| of Gaussian elimination without row exchanges, relative to max |M_ij| (None: no entry)."""
-    import numpy as np
-
-    A = np.array(M, dtype=float)
-    big = float(np.max(np.abs(A))) if A.size else 0.0
-    if not big > 0:
-        return None
-    n = len(A)
-    smallest = np.inf
-    for k in range(n):
-        pivot = A[k, k]
-        if pivot == 0:  # a structural zero: the generated elimination exchanges rows there
-            rows = [r for r in range(k + 1, n) if A[r, k] != 0]
-            if not rows:
-                return 0.0
-            A[[k, rows[0]]] = A[[rows[0], k]]
-            pivot = A[k, k]
-        smallest = min(smallest, abs(pivot) / big)
-        A[k + 1:] -= np.outer(A[k + 1:, k] / pivot, A[k])
-    return float(smallest)
 
 
 def _number(key: str, value: Any) -> float:
