@@ -31,8 +31,10 @@ from ...formulas.parse import FUNCTIONS, dt, parse_expression
 
 __all__ = ["Definition", "parse_definition", "from_objects", "MAX_COORDINATES", "MAX_EXPRESSIONS", "RESERVED"]
 
-#: Most coordinates a definition may have (the symbolic derivation grows as n³; beyond this it is slow).
-MAX_COORDINATES = 12
+#: Most coordinates a definition may have.  The compiled elimination is generated as expressions, whose
+#: printing to C walks them as trees: 2 s to build for a 6-link chain, 26 s for 7 (measured), so more
+#: coordinates wait for a DAG-aware printer (see the package's notes).
+MAX_COORDINATES = 6
 #: Most output expressions.
 MAX_EXPRESSIONS = 50
 #: Names that are neither coordinates nor parameters: the parser's functions and constants, and time.
@@ -99,7 +101,8 @@ def check_coordinates(value: Any, key: str = "coordinates") -> tuple[str, ...]:
     if not value:
         raise _fail(key, "expected at least one coordinate, got an empty list")
     if len(value) > MAX_COORDINATES:
-        raise _fail(key, f"expected at most {MAX_COORDINATES} coordinates, got {len(value)}")
+        raise _fail(key, f"expected at most {MAX_COORDINATES} coordinates (the generated code grows too fast beyond), "
+                         f"got {len(value)}")
     names: list[str] = []
     for q in value:
         if not isinstance(q, str):
