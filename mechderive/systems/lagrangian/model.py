@@ -37,7 +37,6 @@ from ...core.lagrangian import LagrangianModel, from_state_symbols, vanishes
 from ...core.model import SymbolicModel, derived
 from ...core.simplify import is_zero
 from ...core.symbols import coordinate, t as TIME
-from ...errors import InvalidInputError
 from ...solvers.driver import Term
 from .definition import Definition
 
