@@ -188,5 +188,16 @@ class System:
         """A complete scene file (TOML) of this system: the default of ``mechderive run``'s built-ins."""
         return ""
 
+    # --- systems from a program -----------------------------------------------------------------
+
+    @classmethod
+    def from_lagrangian(cls, lagrangian: Any, coordinates: Any, parameters: Any = (),
+                        name: str | None = None) -> "System":
+        """The system of a Lagrangian given by a program (SymPy expressions, or text read by the whitelist
+        parser): see :func:`mechderive.systems.lagrangian.system.from_lagrangian`."""
+        from .lagrangian.system import from_lagrangian
+
+        return from_lagrangian(lagrangian, coordinates, parameters, name)
+
     def __repr__(self) -> str:
         return f"<system {self.name!r}>"

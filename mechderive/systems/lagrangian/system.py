@@ -1,0 +1,483 @@
+"""``system = "lagrangian"``: any holonomic system given by its Lagrangian, derived, compiled, run and checked.
+
+A scene names the coordinates and writes L with ``<q>_dot`` for the velocities, parameters from
+``[parameters]`` and, optionally, the time ``t``::
+
+    system = "lagrangian"
+    coordinates = ["theta", "phi"]
+    lagrangian = "m*l**2/2*(theta_dot**2 + sin(theta)**2*phi_dot**2) + m*g*l*cos(theta)"
+    [initial]            # every q and q_dot
+    [output.expressions] # optional outputs: name = formula of q, q_dot, t and the parameters
+    x = "l*sin(theta)*cos(phi)"
+
+The outputs are each ``q`` and ``q_dot``, ``energy`` (the Jacobi integral h = q̇·∂L/∂q̇ − L, the
+energy when L = T − V; conserved and its drift reported when L does not depend on t), ``p_<q>``
+for each cyclic coordinate (conserved, drift reported), and the expressions.  The equations of
+motion are derived (:mod:`.model`) and integrated by the one driver (:mod:`mechderive.solvers.driver`:
+DOP853 compiled to C where a compiler exists, t carried as a state when L depends on it), rerun
+tighter until the measured global error meets ``rtol``.
+
+:data:`SYSTEM` is the registered family: its :meth:`~LagrangianFamily.configure` returns the
+concrete :class:`LagrangianSystem` of a scene's definition (cached by a hash of its text; the
+compiled code's names carry that hash).  From a program: :func:`from_lagrangian`.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections import OrderedDict
+from typing import TYPE_CHECKING, Any, Mapping, Sequence
+
+from ...errors import InvalidInputError
+from ..base import Derivation, Key, Quantity, Solved, System
+
+if TYPE_CHECKING:  # pragma: no cover
+    import numpy as np
+
+    from ...core.drift import Drift
+    from ...scenes.schema import Scene
+    from .definition import Definition
+    from .model import LagrangianEquations
+
+__all__ = ["SYSTEM", "LagrangianSystem", "LagrangianFamily", "from_lagrangian", "EXAMPLE_SCENE", "EXAMPLE_DEFINITION"]
+
+EXAMPLE_SCENE = '''\
+# The spherical pendulum from its Lagrangian (theta from the downward vertical).
+system = "lagrangian"
+coordinates = ["theta", "phi"]
+lagrangian = "m*l**2/2*(theta_dot**2 + sin(theta)**2*phi_dot**2) + m*g*l*cos(theta)"
+rtol = 1e-10
+[parameters]
+m = 1.0
+l = 1.0
+g = 9.81
+[initial]
+theta = 1.0
+phi = 0.0
+theta_dot = 0.0
+phi_dot = 2.0
+[time]
+t_end = 10.0
+samples = 1001
+[output]
+quantities = ["theta", "phi", "theta_dot", "phi_dot", "energy", "p_phi", "x"]
+[output.expressions]
+x = "l*sin(theta)*cos(phi)"
+'''
+
+#: the definition of :data:`EXAMPLE_SCENE` (its keys as :meth:`LagrangianFamily.configure` gets them)
+EXAMPLE_DEFINITION = {
+    "coordinates": ["theta", "phi"],
+    "lagrangian": "m*l**2/2*(theta_dot**2 + sin(theta)**2*phi_dot**2) + m*g*l*cos(theta)",
+    "output.expressions": {"x": "l*sin(theta)*cos(phi)"},
+}
+
+_SUMMARY = "any holonomic system from its Lagrangian L(q, q_dot, t): derived, compiled, integrated"
+
+
+class LagrangianSystem(System):
+    """The concrete system of one :class:`~.definition.Definition` (see the module docstring)."""
+
+    summary = _SUMMARY
+    section = ""
+    extra_keys = ("output.expressions",)
+    methods = ("integrate",)
+
+    def __init__(self, definition: "Definition", name: str = "lagrangian") -> None:
+        self.name = name  # type: ignore[misc]  # an instance's own name (a program's system)
+        self.definition = definition
+        d = definition
+        self.parameters = tuple(Key(p, "", "a parameter of the Lagrangian") for p in d.parameters)
+        self.initial = (tuple(Key(q, "", f"coordinate {q} at t = 0") for q in d.coordinates)
+                        + tuple(Key(q + "_dot", "", f"velocity d{q}/dt at t = 0") for q in d.coordinates))
+        eq = self.equations
+        self.quantities = (
+            tuple(Quantity(q, "", f"coordinate {q}") for q in d.coordinates)
+            + tuple(Quantity(q + "_dot", "", f"velocity d{q}/dt") for q in d.coordinates)
+            + (Quantity("energy", "", "Jacobi integral h = Σ q̇ ∂L/∂q̇ − L"
+                        + ("" if d.uses_time else " (conserved)")),)
+            + tuple(Quantity(f"p_{q}", "", f"momentum ∂L/∂{q}_dot of the cyclic coordinate {q} (conserved)")
+                    for q in eq.cyclic)
+            + tuple(Quantity(n, "", f"output expression {n}") for n, _ in d.expressions))
+
+    @property
+    def equations(self) -> "LagrangianEquations":
+        from .model import equations
+
+        return equations(self.definition)
+
+    def configure(self, definition: Mapping[str, Any]) -> "LagrangianSystem":
+        """Itself; with ``[output.expressions]``, the same system with those outputs added."""
+        definition = dict(definition)
+        table = definition.pop("output.expressions", None)
+        if definition:
+            raise InvalidInputError(f"scene key {sorted(definition)[0]}: system {self.name!r} takes no such key "
+                                    "(its Lagrangian is fixed)")
+        if not table:
+            return self
+        from .definition import with_expressions
+
+        return _cached(with_expressions(self.definition, table), self.name)
+
+    # --- the scene's values ----------------------------------------------------------------------
+
+    def check_parameters(self, given: Mapping[str, Any], *, strict: bool = True) -> dict[str, Any]:
+        """Every parameter of L and the expressions, a finite number; no other key (see the module docstring)."""
+        from .definition import RESERVED
+
+        d = self.definition
+        names = set(d.coordinates) | {q + "_dot" for q in d.coordinates}
+        unused = [k for k in given if k not in d.parameters]
+        for p in d.parameters:
+            if p not in given:
+                raise InvalidInputError(self._unknown_symbol(p, unused))
+        for key in given:
+            where = f"scene key [parameters].{key}"
+            if key in RESERVED:
+                raise InvalidInputError(f"{where}: expected a parameter name that is not {RESERVED[key]}, got "
+                                        f"{key!r} (name clash)")
+            if key in names:
+                raise InvalidInputError(f"{where}: expected a parameter, got the name of a coordinate or velocity "
+                                        f"(name clash: its value goes in [initial])")
+            if key not in d.parameters:
+                used = ", ".join(d.parameters) or "none"
+                raise InvalidInputError(f"{where}: unknown key; expected the parameters the Lagrangian and the "
+                                        f"expressions use ({used})")
+        return {p: _number(f"[parameters].{p}", given[p]) for p in d.parameters}
+
+    def _unknown_symbol(self, name: str, unused: Sequence[str]) -> str:
+        from .definition import parameter_symbol
+
+        d = self.definition
+        key = "lagrangian"
+        if parameter_symbol(name) not in d.lagrangian.free_symbols:
+            key = next((f"[output.expressions].{n}" for n, e in d.expressions if parameter_symbol(name) in
+                        e.free_symbols), key)
+        coords = ", ".join(d.coordinates)
+        vels = ", ".join(q + "_dot" for q in d.coordinates)
+        given = f"; [parameters] has {', '.join(unused)}, which nothing uses" if unused else ""
+        return (f"scene key {key}: unknown symbol {name!r}: expected a coordinate ({coords}), a velocity ({vels}), "
+                f"t, or a parameter given in [parameters] (add {name} = <value> there{given})")
+
+    def check_initial(self, given: Mapping[str, Any], parameters: Mapping[str, Any]) -> dict[str, Any]:
+        """Every q and q_dot, finite; the mass matrix regular at that state (else the keys it depends on)."""
+        d = self.definition
+        keys = [k.name for k in self.initial]
+        for key in given:
+            if key not in keys:
+                raise InvalidInputError(f"scene key [initial].{key}: unknown key; expected {', '.join(keys)}")
+        for key in keys:
+            if key not in given:
+                raise InvalidInputError(f"scene key [initial].{key}: missing; expected a value for every coordinate "
+                                        f"and velocity: {', '.join(keys)}")
+        values = {k: _number(f"[initial].{k}", given[k]) for k in keys}
+        self._check_regular(dict(parameters), values)
+        return values
+
+    def _check_regular(self, parameters: dict, initial: dict) -> None:
+        import numpy as np
+
+        d, eq = self.definition, self.equations
+        p = [parameters[n] for n in d.dynamics_parameters]
+        q = [initial[n] for n in d.coordinates]
+        v = [initial[n + "_dot"] for n in d.coordinates]
+        M = eq.mass_at(p, q, v, 0.0)
+        problem = None
+        if not np.all(np.isfinite(M)):
+            problem = "not finite"
+        else:
+            cond = np.linalg.cond(M)
+            if not cond <= eq_limit():
+                problem = f"singular (condition number {cond:.3g} > {eq_limit():.0e})"
+            elif eq.solve_kind == "elimination":
+                with np.errstate(all="ignore"):
+                    pivots = np.abs(np.array(eq.pivot_function()(*p, *q, *v, 0.0), dtype=float))
+                smallest = float(np.min(pivots)) / float(np.max(np.abs(M)))
+                if not smallest >= 1.0 / eq_limit():
+                    problem = (f"eliminated with too small a pivot ({smallest:.3g} of the largest entry: the compiled "
+                               "elimination follows the coordinates' order; list them in another order)")
+        if problem is None:
+            return
+        free = {s.name for s in eq.mass_matrix.free_symbols}
+        keys = ([f"[parameters].{n}" for n in d.parameters if n in free]
+                + [f"[initial].{n}" for n in d.coordinates if n in free]
+                + [f"[initial].{n}_dot" for n in d.coordinates if n + "_dot" in free])
+        where = ("scene keys " + ", ".join(keys)) if len(keys) > 1 else (f"scene key {keys[0]}" if keys
+                                                                          else "scene table [initial]")
+        shown = ", ".join(f"{k.split('.')[-1]} = {(parameters | initial)[k.split('.')[-1]]:g}" for k in keys)
+        raise InvalidInputError(f"{where}: expected a mass matrix ∂²L/∂q̇∂q̇ that is invertible at the initial "
+                                f"state, got one that is {problem} at {shown or 'this state'} (singular mass matrix)")
+
+    # --- solving -----------------------------------------------------------------------------
+
+    def solve(self, scene: "Scene", method: str, t: "np.ndarray") -> Solved:
+        """Integrate from the scene's initial state; only the requested expressions are evaluated."""
+        from ...solvers.driver import integrate, integrate_to_rtol
+
+        d, eq = self.definition, self.equations
+        p = [scene.parameters[n] for n in d.dynamics_parameters]
+        p_all = [scene.parameters[n] for n in d.parameters]
+        y0 = ([scene.initial[q] for q in d.coordinates] + [scene.initial[q + "_dot"] for q in d.coordinates]
+              + ([float(t[0])] if d.uses_time else []))
+        wanted = tuple(scene.quantities)
+        term = eq.term
+
+        def run(tol: float) -> Any:
+            return integrate(term, y0, t, p, rtol=tol)
+
+        def estimate(tr: Any) -> float | None:
+            return self._error_estimate(tr, wanted, p, p_all)
+
+        traj, attempts = integrate_to_rtol(run, estimate, scene.rtol)
+        columns = self._columns(traj, wanted, p_all)
+        info = {
+            "error_estimate": attempts[-1]["error_estimate"],
+            "error_estimate_kind": (f"{traj.error_estimate_kind}, absolute, in the outputs' units (energy, p_<q> "
+                                    "and expressions by propagating each state component's distance)"),
+            "backend": traj.backend,
+            "acceleration_solve": {"symbolic": "symbolic (M⁻¹b solved and simplified by SymPy)",
+                                   "elimination": "compiled elimination of the numeric M and b at each step"}[
+                                       eq.solve_kind],
+            "cyclic_coordinates": list(eq.cyclic),
+            "energy_conserved": not d.uses_time,
+            "n_evaluations": traj.n_evaluations,
+            "n_steps": traj.n_steps,
+            "attempts": attempts,
+            "definition": d.digest,
+        }
+        return Solved({q: columns[q] for q in wanted}, info, traj)
+
+    def _columns(self, traj: Any, wanted: Sequence[str], p_all: Sequence[float]) -> dict:
+        import numpy as np
+
+        d = self.definition
+        n = len(d.coordinates)
+        cols: dict[str, Any] = {}
+        for i, q in enumerate(d.coordinates):
+            cols[q], cols[q + "_dot"] = traj.y[:, i], traj.y[:, n + i]
+        for name in traj.invariant_names:
+            if not name.startswith("scale_"):
+                cols[name] = traj.invariant(name)
+        expr_names = [e for e, _ in d.expressions]
+        if any(w in expr_names for w in wanted):
+            vals = self._expressions(p_all, traj.y, traj.t)
+            cols.update({e: v for e, v in zip(expr_names, vals)})
+        return {k: np.ascontiguousarray(v, dtype=float) for k, v in cols.items() if k in wanted}
+
+    def _expressions(self, p: Sequence[float], y: "np.ndarray", t: "np.ndarray") -> list:
+        import numpy as np
+
+        n = len(self.definition.coordinates)
+        with np.errstate(all="ignore"):
+            vals = self.equations.expression_function(self.definition)(*p, *y[:, :2 * n].T, t)
+        return [np.broadcast_to(np.asarray(v, dtype=float), t.shape) for v in vals]
+
+    def _error_estimate(self, traj: Any, wanted: Sequence[str], p: Sequence[float],
+                        p_all: Sequence[float]) -> float | None:
+        """The largest estimated error of the requested outputs: the state's distance to the tighter rerun,
+        and, for a function f of the state, Σ_i |f(y + δ_i e_i) − f(y)| with δ_i component i's distance."""
+        import numpy as np
+
+        if traj.component_error is None:
+            return None
+        d = self.definition
+        n = len(d.coordinates)
+        state_names = [*d.coordinates, *(q + "_dot" for q in d.coordinates)]
+        err = traj.component_error
+        worst = max((float(err[i]) for i, q in enumerate(state_names) if q in wanted), default=0.0)
+        invariants = [q for q in wanted if q in traj.invariant_names]
+        expr_names = [e for e, _ in d.expressions]
+        expressions = [q for q in wanted if q in expr_names]
+        if not invariants and not expressions:
+            return worst
+        inv_fn = self.equations.term.invariant_function()
+        t = traj.t
+
+        def outputs(y: "np.ndarray") -> np.ndarray:
+            rows = []
+            if invariants:
+                with np.errstate(all="ignore"):
+                    vals = inv_fn(*p, *y.T)
+                rows += [np.broadcast_to(np.asarray(vals[traj.invariant_names.index(q)], float), t.shape)
+                         for q in invariants]
+            if expressions:
+                vals = self._expressions(p_all, y, t)
+                rows += [vals[expr_names.index(q)] for q in expressions]
+            return np.array(rows)
+
+        base = outputs(traj.y)
+        total = np.zeros_like(base)
+        for i in range(2 * n):
+            if err[i] > 0:
+                shifted = traj.y.copy()
+                shifted[:, i] += err[i]
+                total += np.abs(outputs(shifted) - base)
+        propagated = float(np.max(total)) if total.size else 0.0
+        return max(worst, propagated) if np.isfinite(propagated) else float("nan")
+
+    def drift(self, scene: "Scene", solved: Solved, t: "np.ndarray") -> dict[str, "Drift"]:
+        """Energy (when ∂L/∂t = 0) and each p_c, each against the largest sum of the sizes of its terms."""
+        import numpy as np
+
+        from ...core.drift import drift
+
+        traj = solved.solution
+        out = {}
+        for name in self.equations.conserved_names:
+            scale = float(np.max(np.abs(traj.invariant(f"scale_{name}"))))
+            out[name] = drift(traj.invariant(name), scale, f"max_t Σ|terms of {name}|")
+        return out
+
+    # --- derive, check ---------------------------------------------------------------------------
+
+    def derivations(self) -> tuple[Derivation, ...]:
+        """L, the Euler–Lagrange equations, M, b, q̈, the momenta, the energy and the conserved momenta."""
+        eq = self.equations
+
+        def conserved(_: Any) -> Any:
+            import sympy as sp
+
+            index = {q: i for i, q in enumerate(self.definition.coordinates)}
+            return sp.Matrix([eq.momenta[index[q]] for q in eq.cyclic]) if eq.cyclic else sp.Matrix([])
+
+        return (
+            Derivation("lagrangian", "L(q, q_dot, t) as given", "(3.62) for the heavy top",
+                       lambda _: eq.state_lagrangian),
+            Derivation("euler_lagrange", "d/dt ∂L/∂q̇_i − ∂L/∂q_i = 0, in functions of t", "",
+                       lambda _: eq.euler_lagrange),
+            Derivation("mass_matrix", "M = ∂²L/∂q̇∂q̇ (M q̈ = b)", "", lambda _: eq.mass_matrix),
+            Derivation("forcing", "b = ∂L/∂q − (∂²L/∂q̇∂q) q̇ − ∂²L/∂q̇∂t (M q̈ = b)", "", lambda _: eq.forcing),
+            Derivation("accelerations", f"q̈ = M⁻¹ b ({eq.solve_kind})", "", lambda _: eq.accelerations),
+            Derivation("momenta", "p = ∂L/∂q̇", "(3.63)-(3.64) for the heavy top", lambda _: eq.momenta),
+            Derivation("energy", "h = Σ q̇ ∂L/∂q̇ − L (conserved when ∂L/∂t = 0)", "(3.65) for the heavy top",
+                       lambda _: eq.energy),
+            Derivation("conserved_momenta", "p_c of the cyclic coordinates (∂L/∂q_c ≡ 0)", "", conserved),
+        )
+
+    def check_system(self) -> Any:
+        """The symbols of ``mechderive check``: q, q_dot (state), q_ddot, the parameters, energy, p_<q>, Lagrangian."""
+        import sympy as sp
+
+        from ...core.symbols import state_symbol
+        from ...formulas import systems as fs
+
+        d, eq = self.definition, self.equations
+        qs = [fs.Quantity(q, state_symbol(q), "state", f"coordinate {q}") for q in d.coordinates]
+        qs += [fs.Quantity(q + "_dot", state_symbol(q + "_dot"), "state", f"velocity of {q}") for q in d.coordinates]
+        qs += [fs.Quantity(q + "_ddot", state_symbol(q + "_ddot"), "derivative",
+                           f"acceleration of {q} (fixed by the equations of motion on a motion)") for q in d.coordinates]
+        qs += [fs.Quantity(p, s, "parameter", "a parameter of the Lagrangian")
+               for p, s in zip(d.parameters, d.parameter_symbols)]
+        qs += [fs.Quantity("Lagrangian", sp.Symbol("Lagrangian", real=True), "defined", "L as given",
+                           lambda s: eq.state_lagrangian),
+               fs.Quantity("energy", sp.Symbol("energy", real=True), "defined", "h = Σ q̇ ∂L/∂q̇ − L",
+                           lambda s: eq.energy)]
+        for i, q in enumerate(d.coordinates):
+            qs.append(fs.Quantity(f"p_{q}", sp.Symbol(f"p_{q}", real=True), "defined", f"p_{q} = ∂L/∂{q}_dot",
+                                  lambda s, i=i: eq.momenta[i]))
+        taken = {x.name for x in qs}
+        qs += [fs.Quantity(n, sp.Symbol(n, real=True), "defined", f"output expression {n}", lambda s, e=e: e)
+               for n, e in d.expressions if n not in taken]
+        return fs.System(name=self.name, summary=_SUMMARY, coordinates=d.coordinates, order=2,
+                         highest=lambda: eq.acceleration_map, quantities=qs, domain={})
+
+    def example_scene(self) -> str:
+        return EXAMPLE_SCENE
+
+
+def eq_limit() -> float:
+    from .model import CONDITION_LIMIT
+
+    return CONDITION_LIMIT
+
+
+def _number(key: str, value: Any) -> float:
+    import math
+
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise InvalidInputError(f"scene key {key}: expected a finite number, got {type(value).__name__} {value!r}")
+    x = float(value)
+    if not math.isfinite(x):
+        raise InvalidInputError(f"scene key {key}: expected a finite number, got {value!r}")
+    return x
+
+
+_CACHE: "OrderedDict[tuple[str, str], LagrangianSystem]" = OrderedDict()
+_LOCK = threading.Lock()
+_CACHE_SIZE = 64
+
+
+def _cached(definition: "Definition", name: str) -> LagrangianSystem:
+    key = (definition.digest, name)
+    with _LOCK:
+        hit = _CACHE.get(key)
+        if hit is not None:
+            _CACHE.move_to_end(key)
+            return hit
+    system = LagrangianSystem(definition, name)
+    reason = system.equations.singular_reason()
+    if reason is not None:
+        raise InvalidInputError(f"scene key lagrangian: expected a regular Lagrangian (an invertible mass matrix "
+                                f"∂²L/∂q̇∂q̇), got a singular mass matrix: {reason}")
+    with _LOCK:
+        _CACHE[key] = system
+        while len(_CACHE) > _CACHE_SIZE:
+            _CACHE.popitem(last=False)
+    return system
+
+
+class LagrangianFamily(System):
+    """The registered ``lagrangian`` family: :meth:`configure` builds a scene's :class:`LagrangianSystem`."""
+
+    name = "lagrangian"
+    summary = _SUMMARY
+    section = ""
+    extra_keys = ("coordinates", "lagrangian", "output.expressions")
+    methods = ("integrate",)
+
+    def configure(self, definition: Mapping[str, Any]) -> LagrangianSystem:
+        """The concrete system of a scene's ``coordinates``, ``lagrangian`` and ``[output.expressions]``."""
+        from .definition import parse_definition
+
+        return _cached(parse_definition(definition), self.name)
+
+    def _example(self) -> LagrangianSystem:
+        return self.configure(EXAMPLE_DEFINITION)
+
+    def derivations(self) -> tuple[Derivation, ...]:
+        """Those of the example scene (the spherical pendulum); a scene's own come from its configured system."""
+        return self._example().derivations()
+
+    def check_system(self) -> Any:
+        return self._example().check_system()
+
+    def example_scene(self) -> str:
+        return EXAMPLE_SCENE
+
+
+SYSTEM = LagrangianFamily()
+
+
+def from_lagrangian(lagrangian: Any, coordinates: Sequence[Any], parameters: Sequence[Any] = (),
+                    name: str | None = None) -> LagrangianSystem:
+    """The system of ``lagrangian`` in ``coordinates``, ready to register, run, derive and check.
+
+    ``lagrangian``: a SymPy expression (coordinates as symbols ``q`` or functions ``q(t)``, velocities
+    as symbols ``q_dot`` or ``q(t).diff(t)``) or text, parsed by the whitelist (never evaluated).
+    ``coordinates``: names, Symbols or functions of t.  ``parameters``: names or Symbols; every other
+    symbol of L must be one of them (``t`` is the time).  ``name``: the system's name for
+    :func:`mechderive.systems.registry.register` and a scene's ``system = "..."`` (default
+    ``"lagrangian_<hash>"``).  Raises :class:`~mechderive.errors.InvalidInputError` naming what is wrong.
+
+    >>> pendulum = from_lagrangian("l**2*theta_dot**2/2 + g*l*cos(theta)", ["theta"], ["g", "l"], name="pendulum")
+    >>> pendulum.quantity_names()
+    ('theta', 'theta_dot', 'energy')
+    """
+    from .definition import from_objects
+
+    definition = from_objects(lagrangian, coordinates, parameters)
+    if name is None:
+        name = f"lagrangian_{definition.digest}"
+    if not isinstance(name, str) or not name.isidentifier():
+        raise InvalidInputError(f"expected a system name that is an identifier, got {name!r}")
+    return _cached(definition, name)
