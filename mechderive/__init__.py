@@ -53,6 +53,7 @@ _PUBLIC = {
     "System": "mechderive.systems.base",
     "register_system": "mechderive.systems.registry",
     "rigid_body": "mechderive.systems.rigid_body.system",
+    "from_lagrangian": "mechderive.systems.lagrangian",
 }
 
 __all__ = sorted(_PUBLIC) + ["__version__"]
