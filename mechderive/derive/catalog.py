@@ -24,6 +24,7 @@ from typing import Any, Callable
 
 import sympy as sp
 
+from ..core.codegen import ARGUMENTS
 from ..core.symbols import state_symbol, to_state_symbols
 from ..errors import InvalidInputError
 from .options import Options, body_parameters
@@ -328,49 +329,3 @@ def system(name: str) -> System:
 def listing(name: str) -> list[tuple[str, str, str]]:
     """[(quantity, description, equation number)] of a system, defaults first."""
     return [(q, spec.description, spec.equation) for q, spec in system(name).quantities.items()]
-
-
-#: Argument names in the order generated functions take them, with their meaning and unit
-#: (any consistent set of units; "length" etc. name the dimension).  Names not listed follow,
-#: sorted.
-ARGUMENTS: dict[str, tuple[str, str]] = {
-    "I1": ("principal moment of inertia about e1", "mass·length²"),
-    "I2": ("principal moment of inertia about e2", "mass·length²"),
-    "I3": ("principal moment of inertia about e3", "mass·length²"),
-    "M": ("mass", "mass"),
-    "g": ("gravitational acceleration", "length/time²"),
-    "l": ("distance from the pivot to the centre of mass (heavy top) or rod length", "length"),
-    "R": ("radius", "length"),
-    "h": ("height", "length"),
-    "a": ("a = I3 ω3/I1 (3.66), or the cuboid's or ellipsoid's first dimension", "1/time or length"),
-    "b": ("b = p_φ/I1 (3.66), or the second dimension", "1/time or length"),
-    "c": ("the cuboid's or ellipsoid's third dimension", "length"),
-    "alpha": ("α = 2E'/I1 (3.72), or a rotation angle", "1/time² or rad"),
-    "beta": ("β = 2Mgl/I1 (3.72)", "1/time²"),
-    "half_mass": ("mass of each half of the cat", "mass"),
-    "joint_offset": ("distance from the waist joint to each half's centre", "length"),
-    "radius": ("radius of each half's ring of masses", "length"),
-    "half_length": ("axial half-length of each half", "length"),
-    "phi": ("first Euler angle φ", "rad"),
-    "theta": ("second Euler angle θ", "rad"),
-    "psi": ("third Euler angle ψ", "rad"),
-    "bend": ("bend angle of the cat", "rad"),
-    "swivel": ("swivel angle of the cat's bending axis", "rad"),
-    "phi_dot": ("φ̇", "rad/time"),
-    "theta_dot": ("θ̇", "rad/time"),
-    "psi_dot": ("ψ̇", "rad/time"),
-    "bend_dot": ("rate of bend", "rad/time"),
-    "swivel_dot": ("rate of swivel", "rad/time"),
-    "omega1": ("body component ω1 of the angular velocity", "rad/time"),
-    "omega2": ("body component ω2", "rad/time"),
-    "omega3": ("body component ω3 (the spin)", "rad/time"),
-    "tau1": ("body component τ1 of the torque", "mass·length²/time²"),
-    "tau2": ("body component τ2 of the torque", "mass·length²/time²"),
-    "tau3": ("body component τ3 of the torque", "mass·length²/time²"),
-    "u": ("u = cos θ (3.71)", "1"),
-    "u0": ("u at release or of uniform precession", "1"),
-    "theta0": ("θ of uniform precession", "rad"),
-    "p_phi": ("conserved momentum p_φ", "mass·length²/time"),
-    "p_psi": ("conserved momentum p_ψ", "mass·length²/time"),
-    "Omega": ("spin rate Ω (3.40) or precession rate Ω (3.36)", "rad/time"),
-}

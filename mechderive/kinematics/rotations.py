@@ -26,9 +26,9 @@ _RATES = ("phi", "theta", "psi", "phi_dot", "theta_dot", "psi_dot")
 def _build(quantity: str, names: tuple[str, ...]) -> Callable[[], tuple]:
     def build():
         from ..core.symbols import state_symbol
-        from . import euler
+        from . import euler_symbolic
 
-        expr = getattr(euler.model(), quantity)
+        expr = getattr(euler_symbolic.model(), quantity)
         return [state_symbol(n) for n in names], expr
     return build
 
@@ -38,16 +38,33 @@ def _function(quantity: str, names: tuple[str, ...]) -> Callable[..., np.ndarray
     return compile_cached(f"kinematics.{quantity}", _build(quantity, names))
 
 
-def rotation_matrix(phi: Any, theta: Any, psi: Any) -> np.ndarray:
-    """Numeric R(φ, θ, ψ) of (3.54), vectorised: arrays broadcast, result shape (..., 3, 3).
+def _axis_rotation(axis: int, angle: np.ndarray) -> np.ndarray:
+    """The passive rotation R_a(α) about axis 1 or 3 ((3.51), (3.52)), shape (..., 3, 3): the numeric
+    form of exp(α J_a) derived in :func:`mechderive.kinematics.euler_symbolic.axis_rotation`."""
+    c, s = np.cos(angle), np.sin(angle)
+    out = np.zeros(angle.shape + (3, 3))
+    i, j = (1, 2) if axis == 1 else (0, 1)
+    out[..., axis - 1, axis - 1] = 1.0
+    out[..., i, i] = c
+    out[..., j, j] = c
+    out[..., i, j] = s
+    out[..., j, i] = -s
+    return out
 
-    Angles in radians.
+
+def rotation_matrix(phi: Any, theta: Any, psi: Any) -> np.ndarray:
+    """Numeric R(φ, θ, ψ) = R3(ψ) R1(θ) R3(φ) of (3.54), vectorised: arrays broadcast, result shape (..., 3, 3).
+
+    Angles in radians.  Pure NumPy (no SymPy, no compiled code): the product of the three
+    elementary rotations, agreeing with the derived R of :mod:`mechderive.kinematics.euler_symbolic`
+    to a few ulps (``tests/test_kinematics_numeric.py``).
 
     >>> np.allclose(rotation_matrix(0.3, 0.0, 0.4), rotation_matrix(0.7, 0.0, 0.0))
     True
     """
-    f = _function("state_rotation", ("phi", "theta", "psi"))
-    return f(as_finite_array(phi, "phi"), as_finite_array(theta, "theta"), as_finite_array(psi, "psi"))
+    phi, theta, psi = np.broadcast_arrays(as_finite_array(phi, "phi"), as_finite_array(theta, "theta"),
+                                          as_finite_array(psi, "psi"))
+    return _axis_rotation(3, psi) @ _axis_rotation(1, theta) @ _axis_rotation(3, phi)
 
 
 def _rates(quantity: str, values: tuple) -> np.ndarray:
