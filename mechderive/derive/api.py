@@ -88,14 +88,14 @@ def derive_entries(system_name: Any, quantities: Iterable[str] | None = None, *,
                    frame: str | None = None, shape: str | None = None, pivot: Any = None,
                    moments: Sequence[Any] | None = None, values: Mapping[Any, Any] | None = None,
                    simplify: bool = False, labels: Mapping[str, str] | None = None,
-                   scene_parameters: bool = False) -> list[Derived]:
+                   scene_parameters: bool | Mapping[str, Any] = False) -> list[Derived]:
     """The :class:`Derived` records of :func:`derive` (with description, equation number, left-hand side).
 
     ``labels``: how errors name the options (:data:`.options.API_LABELS` by default; the command
     line passes :data:`.options.CLI_LABELS`).
     """
     spec = system(system_name)
-    scene_values = _scene_values(system_name) if scene_parameters else {}
+    scene_values = _scene_values(system_name, scene_parameters)
     if values is not None and not isinstance(values, Mapping):
         raise InvalidInputError(f"values: expected a mapping name -> number, got {type(values).__name__}")
     options = Options(sequence=sequence, frame=frame, shape=shape, pivot=pivot, moments=moments,
@@ -137,15 +137,24 @@ def derive_entries(system_name: Any, quantities: Iterable[str] | None = None, *,
     return out
 
 
-def _scene_values(system: Any) -> dict[str, Any]:
-    """{name: exact number} of a scene file's scalar ``[parameters]`` (its lists are left out)."""
+def _scene_values(system: Any, scene_parameters: bool | Mapping[str, Any]) -> dict[str, Any]:
+    """{name: exact number} of a scene's scalar ``[parameters]`` (its lists are left out): those of the
+    scene file ``system`` if ``scene_parameters`` is True, or ``scene_parameters`` itself (a mapping)."""
     from ..formulas.systems import find_system, is_scene_path
     from .options import as_number
 
-    if not is_scene_path(system):
-        raise InvalidInputError(f"scene_parameters: expected a scene file (a path ending .toml) as the system, "
-                                f"got {_short(repr(system))}")
-    _, parameters = find_system(system)
+    if isinstance(scene_parameters, Mapping):
+        parameters = scene_parameters
+    elif scene_parameters is True:
+        if not is_scene_path(system):
+            raise InvalidInputError(f"scene_parameters: expected a scene file (a path ending .toml) as the system, "
+                                    f"got {_short(repr(system))}")
+        _, parameters = find_system(system)
+    elif scene_parameters is False:
+        return {}
+    else:
+        raise InvalidInputError(f"scene_parameters: expected True, False or a mapping name -> number, got "
+                                f"{_short(repr(scene_parameters))}")
     return {k: as_number(v, f"scene key [parameters].{k}") for k, v in parameters.items()
             if isinstance(k, str) and k.isidentifier() and isinstance(v, (int, float)) and not isinstance(v, bool)}
 
@@ -153,7 +162,7 @@ def _scene_values(system: Any) -> dict[str, Any]:
 def derive(system: Any, quantities: Iterable[str] | None = None, *, sequence: str = "ZXZ",
            frame: str | None = None, shape: str | None = None, pivot: Any = None,
            moments: Sequence[Any] | None = None, values: Mapping[Any, Any] | None = None,
-           simplify: bool = False, scene_parameters: bool = False) -> dict[str, Any]:
+           simplify: bool = False, scene_parameters: bool | Mapping[str, Any] = False) -> dict[str, Any]:
     """{quantity: SymPy object} of ``system``, derived by the toolkit (never typed in).
 
     Parameters
@@ -176,8 +185,9 @@ def derive(system: Any, quantities: Iterable[str] | None = None, *, sequence: st
     simplify
         Apply :func:`sympy.simplify` to every value (slow for the falling cat).
     scene_parameters
-        With a scene file: substitute its ``[parameters]`` numbers (exactly, as ``values`` does)
-        for the symbols of those names left in the results; ``values`` take precedence.
+        True with a scene file: substitute its ``[parameters]`` numbers (exactly, as ``values``
+        does) for the symbols of those names left in the results, ``values`` taking precedence;
+        or those parameters as a mapping (a scene already read).
 
     Values are in the state symbols ``phi, theta, psi, phi_dot, …``.
     """
