@@ -238,12 +238,19 @@ def system(name: Any) -> System:
 
 
 class _Systems(Mapping):
-    """{name: catalog} of every system and generic catalog, looked up through the registry on access."""
+    """{name: catalog} of every system and generic catalog, looked up through the registry on access
+    (an unknown name raises :class:`InvalidInputError` listing the known ones)."""
 
     def __getitem__(self, name: str) -> System:
         if not isinstance(name, str) or name not in names():
-            raise KeyError(name)
+            raise InvalidInputError(f"expected a system among {', '.join(names())}, got {_short(repr(name))}")
         return system(name)
+
+    def __contains__(self, name: object) -> bool:
+        return isinstance(name, str) and name in names()
+
+    def get(self, name: str, default: Any = None) -> Any:
+        return self[name] if name in self else default
 
     def __iter__(self) -> Iterator[str]:
         return iter(names())
