@@ -174,13 +174,15 @@ def _merged(substitutes: list[Callable[[Options], Mapping]]) -> Callable[[Option
 
 
 def from_derivations(obj: Any) -> System:
-    """The catalog of a system object (a :class:`~mechderive.systems.base.System`): its ``derivations()``.
+    """The catalog of a system object (a :class:`~mechderive.systems.base.System`): its ``derivations()``,
+    titled by their ``summary`` (:class:`~mechderive.systems.base.Derivations`) or the system's.
 
     Raises :class:`InvalidInputError` naming the system where a derivation is malformed (a name
     that is not an identifier or is repeated, an unknown option) or where it has none.
     """
     name = getattr(obj, "name", "?")
-    derivations = tuple(obj.derivations() or ())
+    given = obj.derivations() or ()
+    derivations = tuple(given)
     if not derivations:
         raise InvalidInputError(f"expected a system with derivations for derive, got {name!r}, which has none")
     quantities: dict[str, Quantity] = {}
@@ -207,8 +209,8 @@ def from_derivations(obj: Any) -> System:
         if d.substitute is not None and d.substitute not in substitutes:
             substitutes.append(d.substitute)
     defaults = tuple(d.name for d in derivations if d.default) or tuple(quantities)
-    return System(name, getattr(obj, "summary", "") or "", quantities, defaults, frozenset(takes),
-                  _merged(substitutes))
+    summary = getattr(given, "summary", "") or getattr(obj, "summary", "") or ""
+    return System(name, summary, quantities, defaults, frozenset(takes), _merged(substitutes))
 
 
 def _derivable(obj: Any) -> bool:

@@ -73,7 +73,7 @@ class _Entries:
 
     def __init__(self, name: str, module: Any) -> None:
         self.name, self._module = name, module
-        self.summary = getattr(module, "SUMMARY", "")
+        self.summary = ""
 
     def derivations(self) -> tuple:
         return self._module.derivations()

@@ -43,7 +43,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..scenes.schema import Scene
     from ..scenes.units import Scaled
 
-__all__ = ["Key", "Quantity", "Solved", "OutOfReach", "System", "Derivation"]
+__all__ = ["Key", "Quantity", "Solved", "OutOfReach", "System", "Derivation", "Derivations"]
 
 
 @dataclass(frozen=True)
@@ -118,6 +118,18 @@ class Derivation:
     substitute: Callable[[Any], Mapping] | None = None
 
 
+class Derivations(tuple):
+    """A system's derivations (a tuple of :class:`Derivation`) with the title ``derive`` prints above
+    them, ``summary`` (the system's own :attr:`System.summary` where empty)."""
+
+    summary: str
+
+    def __new__(cls, items: Any = (), summary: str = "") -> "Derivations":
+        self = super().__new__(cls, items)
+        self.summary = summary
+        return self
+
+
 class System:
     """Base class of every system; a subclass sets the class attributes and overrides the methods.
 
@@ -189,7 +201,7 @@ class System:
     # --- derive, check, plot ----------------------------------------------------------------------
 
     def derivations(self) -> tuple[Derivation, ...]:
-        """What ``mechderive derive`` can print for this system."""
+        """What ``mechderive derive`` can print for this system (a tuple, or :class:`Derivations`)."""
         return ()
 
     def check_system(self) -> Any:

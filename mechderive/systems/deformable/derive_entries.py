@@ -10,12 +10,12 @@ import functools
 
 import sympy as sp
 
-from ..base import Derivation
+from ..base import Derivation, Derivations
 
-__all__ = ["derivations", "check_system", "SUMMARY"]
+__all__ = ["derivations", "check_system"]
 
-#: the header of ``derive``'s output (the system's ``summary``)
-SUMMARY = "the falling cat, two jointed halves (section 3.7)"
+#: the title of ``derive``'s output
+_SUMMARY = "the falling cat, two jointed halves (section 3.7)"
 
 
 def _cat():
@@ -25,9 +25,9 @@ def _cat():
 
 
 @functools.cache
-def derivations() -> tuple[Derivation, ...]:
+def derivations() -> Derivations:
     """What ``mechderive derive falling_cat`` can print, defaults first (Ω_bend, Ω_swivel, F)."""
-    return (
+    return Derivations((
         Derivation("Omega_bend", "gauge potential Ω_A for A = bend (Ω = Ω_A ẋ^A at L = 0)", "3.87",
                    lambda o: _cat().connection[0], lhs=lambda: sp.Symbol("Omega_bend"), default=True),
         Derivation("Omega_swivel", "gauge potential Ω_A for A = swivel", "3.87",
@@ -40,7 +40,7 @@ def derivations() -> tuple[Derivation, ...]:
                    lhs=lambda: sp.Symbol("Itilde")),
         Derivation("apparent_angular_momentum", "L̃ of the shape change", "3.94",
                    lambda o: _cat().apparent_angular_momentum, lhs=lambda: sp.Symbol("Ltilde")),
-    )
+    ), summary=_SUMMARY)
 
 
 def check_system() -> None:

@@ -18,12 +18,12 @@ import sympy as sp
 from ...core.check_system import BodyRegion, Quantity, RigidBody, System, decimal4, jet_name
 from ...core.symbols import state_symbol, to_state_symbols
 from ...errors import InvalidInputError
-from ..base import Derivation
+from ..base import Derivation, Derivations
 
-__all__ = ["derivations", "check_system", "SUMMARY"]
+__all__ = ["derivations", "check_system"]
 
-#: the header of ``derive``'s output (the system's ``summary``)
-SUMMARY = "the free rigid body in principal axes (sections 3.3–3.5)"
+#: the title of ``derive``'s output
+_SUMMARY = "the free rigid body in principal axes (sections 3.3–3.5)"
 
 _s = state_symbol
 _RATES = ("phi_dot", "theta_dot", "psi_dot")
@@ -102,11 +102,12 @@ _TABLE: tuple = (
 
 
 @functools.cache
-def derivations() -> tuple[Derivation, ...]:
+def derivations() -> Derivations:
     """What ``mechderive derive free_top`` can print, defaults first (L, Euler's equations, T, L²)."""
     takes = frozenset({"sequence", "shape", "moments"})
-    return tuple(Derivation(name, meaning, eq, build, lhs=lhs, default=default, options=takes, substitute=_parameters)
-                 for name, meaning, eq, build, lhs, default in _TABLE)
+    return Derivations((Derivation(name, meaning, eq, build, lhs=lhs, default=default, options=takes,
+                                   substitute=_parameters)
+                        for name, meaning, eq, build, lhs, default in _TABLE), summary=_SUMMARY)
 
 
 # --- check ----------------------------------------------------------------------------------------

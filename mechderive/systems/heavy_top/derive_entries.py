@@ -20,12 +20,12 @@ import sympy as sp
 from ...core.check_system import BodyRegion, Quantity, RigidBody, System, ceil4, decimal4
 from ...core.symbols import state_symbol, to_state_symbols
 from ...errors import InvalidInputError
-from ..base import Derivation
+from ..base import Derivation, Derivations
 
-__all__ = ["derivations", "check_system", "SUMMARY"]
+__all__ = ["derivations", "check_system"]
 
-#: the header of ``derive``'s output (the system's ``summary``)
-SUMMARY = "the heavy symmetric top (section 3.6)"
+#: the title of ``derive``'s output
+_SUMMARY = "the heavy symmetric top (section 3.6)"
 
 _s = state_symbol
 _ZERO = "= 0"
@@ -114,11 +114,12 @@ _TABLE: tuple = (
 
 
 @functools.cache
-def derivations() -> tuple[Derivation, ...]:
+def derivations() -> Derivations:
     """What ``mechderive derive heavy_top`` can print, defaults first (L, (φ̈, θ̈, ψ̈), p_ψ, p_φ, E)."""
     takes = frozenset({"shape", "moments"})
-    return tuple(Derivation(name, meaning, eq, build, lhs=lhs, default=default, options=takes, substitute=_parameters)
-                 for name, meaning, eq, build, lhs, default in _TABLE)
+    return Derivations((Derivation(name, meaning, eq, build, lhs=lhs, default=default, options=takes,
+                                   substitute=_parameters)
+                        for name, meaning, eq, build, lhs, default in _TABLE), summary=_SUMMARY)
 
 
 # --- check ----------------------------------------------------------------------------------------
