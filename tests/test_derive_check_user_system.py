@@ -192,16 +192,19 @@ def test_a_malformed_system_is_refused_naming_it():
 
 
 def test_a_built_in_system_through_a_scene_file(tmp_path, capsys):
-    """A heavy-top scene: its derivations and symbols, and its parameters put in on request."""
+    """A free-top scene: its derivations and symbols, and its parameters put in on request."""
     from mechderive.scenes.builtin import scene_text
 
-    path = tmp_path / "top.toml"
-    path.write_text(scene_text("default"))
-    entries = derive_entries(str(path), ["p_psi"], scene_parameters=True)
-    # p_ψ = I3 ω3 with ω3 = ψ̇ + φ̇ cos θ (3.58), I3 the scene's number (read here with tomllib), exactly
-    I3 = sp.Rational(repr(tomllib.loads(scene_text("default"))["parameters"]["I3"]))
-    phi_dot, psi_dot = state_symbol("phi_dot"), state_symbol("psi_dot")
-    assert sp.expand(entries[0].value - I3 * (psi_dot + phi_dot * sp.cos(state_symbol("theta")))) == 0
-    assert main(["check", str(path), "dt(p_phi) = 0"]) == 0
-    assert "on-shell" in capsys.readouterr().out
-    assert "\np_ψ = " in render(entries, "text", system="heavy_top")
+    text = scene_text("free_top_tumbling")
+    path = tmp_path / "free.toml"
+    path.write_text(text)
+    entries = derive_entries(str(path), ["energy"], scene_parameters=True)
+    # T = ½ Σ I_a ω_a² (3.46) with the scene's moments (read here with tomllib), exactly
+    I = [sp.Rational(repr(tomllib.loads(text)["parameters"][f"I{a}"])) for a in (1, 2, 3)]
+    w = [state_symbol(f"omega{a}") for a in (1, 2, 3)]
+    assert sp.expand(entries[0].value - sum(i * x**2 for i, x in zip(I, w)) / 2) == 0
+    claim = "T = " + " + ".join(f"{i}*omega{a}**2/2" for a, i in zip((1, 2, 3), I))
+    assert main(["check", str(path), claim, "--parameters"]) == 0          # with the scene's moments: identity
+    assert "identity" in capsys.readouterr().out
+    assert main(["check", str(path), claim]) == 1                          # for every body: false
+    assert "T = " in render(entries, "text", system="free_top")
