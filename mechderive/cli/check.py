@@ -23,11 +23,15 @@ inequalities; heavy top: I1 >= M l^2 + I3/2), as the solvers require; --any-mome
 A numeric agreement counts only when the digits resolve every scale in the claim; an overflow or
 a difference below the working precision is undecided, never an identity.
 
+SYSTEM is a registered system (heavy_top, free_top, or one registered by a program) or a scene
+file ending .toml (the system it configures; --parameters puts its [parameters] in as --given).
+
 examples:
   mechderive check heavy_top --symbols
   mechderive check heavy_top 'dt(E) = 0'
   mechderive check heavy_top 'phi_dot = (b - a*cos(theta))/sin(theta)**2'
   mechderive check free_top 'dt(omega1) = Omega*omega2' --given 'I2 = I1' --given 'Omega = omega3*(I1 - I3)/I1'
+  mechderive check my_top.toml 'dt(E) = 0' --parameters
 """
 
 
@@ -35,16 +39,21 @@ def add_parser(sub: "argparse._SubParsersAction") -> None:
     p = sub.add_parser(
         "check",
         help="decide whether a formula is an identity, holds on every motion, or is false",
-        description="Decide a claim 'LHS = RHS' about a system (heavy_top or free_top) against the "
+        description="Decide a claim 'LHS = RHS' about a system (heavy_top, free_top, a registered one or a scene "
+        "file's) against the "
         "toolkit's derived model: exactly where possible, else at random points with 30/60-digit arithmetic.",
         epilog=_EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    p.add_argument("system", metavar="SYSTEM", help="heavy_top or free_top")
+    p.add_argument("system", metavar="SYSTEM", help="heavy_top, free_top, a registered system, or a scene file "
+                                                    "ending .toml")
     p.add_argument("claim", metavar="CLAIM", nargs="?", help="the claim 'LHS = RHS'")
     p.add_argument("--given", metavar="'NAME = EXPR'", action="append", default=[],
                    help="define a new name, or specialise a state variable or parameter (repeatable)")
     p.add_argument("--symbols", action="store_true", help="list the system's symbols with their meanings")
+    p.add_argument("--parameters", action="store_true",
+                   help="with a scene file: specialise the system's parameters to the scene's [parameters] "
+                        "(as --given 'NAME = NUMBER' does; a --given of the same name takes precedence)")
     p.add_argument("--json", action="store_true",
                    help="print {verdict, method, detail, counterexample?, assumptions?} as JSON")
     p.add_argument("--points", type=int, default=20, help="random points of the numeric method (≥ 20; default 20)")
@@ -101,21 +110,41 @@ def _on_the_command_line(message: str) -> str:
     return message
 
 
+def _scene_givens(system, parameters: dict, given: list[str]) -> list[str]:
+    """``NAME = NUMBER`` for each scalar scene parameter that is a parameter of ``system`` and not in ``given``."""
+    import re
+
+    typed = {m.group(1) for g in given if (m := re.match(r"\s*([A-Za-z_][A-Za-z0-9_]*)\s*=", g))}
+    out = []
+    for name, value in parameters.items():
+        if (isinstance(value, (int, float)) and not isinstance(value, bool) and name in system.names
+                and system.kind(system.names[name]) == "parameter" and name not in typed):
+            out.append(f"{name} = {float(value)!r}")
+    return out
+
+
 def run(args: argparse.Namespace) -> int:
     from ..formulas import check, get_system
+    from ..formulas.systems import find_system, is_scene_path
 
     try:
         try:
-            system = get_system(args.system)
+            target, parameters = find_system(args.system) if is_scene_path(args.system) else (args.system, {})
+            system = get_system(target)
         except InvalidInputError as exc:
             raise InvalidInputError(f"system: {exc}") from None
+        if args.parameters and not is_scene_path(args.system):
+            raise InvalidInputError(f"--parameters: expected a scene file (SYSTEM ending .toml), got {args.system!r}")
+        given = list(args.given)
+        if args.parameters:
+            given += _scene_givens(system, parameters, given)
         if args.symbols:
             _print_symbols(system, args.json)
             if args.claim is None:
                 return 0
         if args.claim is None:
             raise InvalidInputError("CLAIM: expected a claim like 'dt(E) = 0' (or --symbols), got none")
-        verdict = check(args.claim, args.system, given=args.given, points=args.points, seed=args.seed,
+        verdict = check(args.claim, system, given=given, points=args.points, seed=args.seed,
                         budget=args.budget, any_moments=args.any_moments)
     except InvalidInputError as exc:
         message = _on_the_command_line(str(exc))

@@ -10,6 +10,8 @@ Examples::
     mechderive derive angular_velocity --sequence zyx    # lower case: space-fixed, as in SciPy
     mechderive derive inertia solid_cone --pivot 0
     mechderive derive heavy_top --list
+    mechderive derive my_top.toml --list                 # a scene file: the system it configures
+    mechderive derive my_top.toml energy --parameters    # ... with its [parameters] numbers put in
 
 Formats: ``text`` (unicode), ``latex`` (equation environments for amsmath, dots for rates),
 ``sympy`` (Python source rebuilding the exact SymPy objects: symbols with their assumptions, then
@@ -24,6 +26,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 FORMATS = ("text", "latex", "sympy", "python", "c", "json")
 
@@ -34,10 +37,12 @@ def add_parser(sub: "argparse._SubParsersAction") -> None:
         help="print derived equations (text, LaTeX, SymPy, Python, C, JSON)",
         description="Print a system's derived quantities: by default its Lagrangian, equations of motion and "
                     "conserved quantities; or the QUANTITY names given (see --list).  Systems: free_top, "
-                    "heavy_top, falling_cat, rotation, angular_velocity, inertia SHAPE.",
+                    "heavy_top, falling_cat, any registered system, rotation, angular_velocity, inertia SHAPE, "
+                    "or a scene file SCENE.toml (the system it configures).",
     )
-    p.add_argument("system", metavar="SYSTEM", help="free_top, heavy_top, falling_cat, rotation, angular_velocity "
-                                                    "or inertia (then SHAPE first)")
+    p.add_argument("system", metavar="SYSTEM", help="free_top, heavy_top, falling_cat, a registered system, rotation, "
+                                                    "angular_velocity, inertia (then SHAPE first), or a scene file "
+                                                    "ending .toml")
     p.add_argument("quantities", metavar="QUANTITY", nargs="*", help="quantities to print (default: the main ones)")
     p.add_argument("--format", default="text", metavar="FORMAT",
                    help=f"one of {', '.join(FORMATS)} (default text)")
@@ -58,36 +63,46 @@ def add_parser(sub: "argparse._SubParsersAction") -> None:
                    help="numeric principal moments (numbers like 1.5, 2e-3 or 1/3; 0 or 1e-300 to 1e300)")
     p.add_argument("--set", action="append", default=[], metavar="NAME=NUMBER", dest="values",
                    help="substitute a number for a symbol (repeatable), e.g. --set g=9.81 (0 or 1e-300 to 1e300)")
+    p.add_argument("--parameters", action="store_true",
+                   help="with a scene file: substitute its [parameters] numbers for the symbols of those names "
+                        "(--set takes precedence)")
     p.set_defaults(run=run)
 
 
-def _shape_and_quantities(args: argparse.Namespace) -> tuple[str | None, list[str]]:
+def _shape_and_quantities(args: argparse.Namespace, spec) -> tuple[str | None, list[str]]:
     quantities = list(args.quantities)
     shape = args.shape
-    if args.system == "inertia" and shape is None:
+    if spec.requires_shape and shape is None:
         from ..errors import InvalidInputError
         from ..inertia.bodies import BODIES
 
         if not quantities or quantities[0] not in BODIES:
             got = quantities[0] if quantities else "none"
-            raise InvalidInputError(f"expected a shape after inertia, one of {', '.join(BODIES)}, got {got!r}")
+            raise InvalidInputError(f"expected a shape after {spec.name}, one of {', '.join(BODIES)}, got {got!r}")
         shape = quantities.pop(0)
     return shape, quantities
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..derive.catalog import listing, system
+    from ..derive.catalog import system
     from ..derive.formats import render
     from ..derive.options import parse_assignment
     from ..errors import InvalidInputError
+    from ..formulas.systems import find_system, is_scene_path
 
-    spec = system(args.system)
+    scene = is_scene_path(args.system)
+    # a scene file is read once: its system object and parameters go on
+    target, scene_parameters = find_system(args.system) if scene else (args.system, {})
+    spec = system(target)
     if args.format not in FORMATS:
         raise InvalidInputError(f"expected a format among {', '.join(FORMATS)}, got {args.format!r}")
+    if args.parameters and not scene:
+        raise InvalidInputError(f"--parameters: expected a scene file (SYSTEM ending .toml), got {args.system!r}")
     if args.list:
         width = max(len(q) for q in spec.quantities)
         print(f"{spec.name}: {spec.summary}")
-        for name, description, equation in listing(args.system):
+        for name, q in spec.quantities.items():
+            description, equation = q.description, q.equation
             mark = "*" if name in spec.defaults else " "
             eq = f"({equation})" if equation else ""
             print(f" {mark} {name:<{width}}  {eq:<8}  {description}")
@@ -96,18 +111,21 @@ def run(args: argparse.Namespace) -> int:
     from ..derive.api import derive_entries
     from ..derive.options import CLI_LABELS, Options
 
-    shape, quantities = _shape_and_quantities(args)
+    shape, quantities = _shape_and_quantities(args, spec)
     values = dict(parse_assignment(v) for v in args.values)
     # Every text argument is read here, by the whitelist parser, and only what it built goes on:
     # the headers of the output show the parsed values, never the text typed.
     opts = Options(sequence=args.sequence, frame=args.frame, shape=shape, pivot=args.pivot, moments=args.moments,
                    values=values, labels=CLI_LABELS)
-    entries = derive_entries(args.system, quantities or None, sequence=opts.sequence, frame=opts.frame, shape=shape,
+    entries = derive_entries(target, quantities or None, sequence=opts.sequence, frame=opts.frame, shape=shape,
                              pivot=opts.pivot, moments=opts.moments, values=opts.values, simplify=args.simplify,
-                             labels=CLI_LABELS)
-    shown = {"sequence": opts.sequence, "frame": opts.frame} if "sequence" in spec.takes else {}
+                             labels=CLI_LABELS, scene_parameters=scene_parameters if args.parameters else False)
+    shown = {"scene": Path(args.system).name} if scene else {}
+    shown.update({"sequence": opts.sequence, "frame": opts.frame} if "sequence" in spec.takes else {})
     shown.update({"shape": shape, "pivot": opts.pivot,
                   "moments": " ".join(map(str, opts.moments)) if opts.moments else None})
     shown.update(opts.values)
-    sys.stdout.write(render(entries, args.format, system=args.system, summary=spec.summary, options=shown, cse=args.cse))
+    if args.parameters:
+        shown["parameters"] = "from the scene"
+    sys.stdout.write(render(entries, args.format, system=spec.name, summary=spec.summary, options=shown, cse=args.cse))
     return 0

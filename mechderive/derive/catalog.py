@@ -1,15 +1,22 @@
 """What ``mechderive derive`` can print: per system, quantity name → (description, equation, derivation).
 
 Every value is taken from the toolkit's own derivations (the models of
-:mod:`mechderive.systems`, :mod:`mechderive.kinematics`, :mod:`mechderive.inertia` and
-:mod:`.sequences`); nothing here is a formula typed in.  Values are SymPy objects in the
-state symbols ``phi, theta, psi, phi_dot, …`` (never functions of t), so that every format —
-text, LaTeX, code — prints the same objects.  Each quantity also names its left-hand side
-(a SymPy object, or :data:`ZERO` for "… = 0").
+:mod:`mechderive.systems`, :mod:`mechderive.kinematics`, :mod:`mechderive.inertia`);
+nothing here is a formula typed in.  Values are SymPy objects in the state symbols ``phi,
+theta, psi, phi_dot, …`` (never functions of t), so that every format — text, LaTeX, code —
+prints the same objects.  Each quantity also names its left-hand side (a SymPy object, or
+:data:`ZERO` for "… = 0").
 
-Systems: ``free_top``, ``heavy_top``, ``falling_cat``, ``rotation``, ``angular_velocity``,
-``inertia`` (needs a shape).  :func:`listing` gives what can be asked of each, with the
-chapter's equation numbers.
+Two kinds of catalogs:
+
+- a *system*'s, from its :meth:`~mechderive.systems.base.System.derivations` (each a
+  :class:`~mechderive.systems.base.Derivation`), found through the registry of systems
+  (:mod:`mechderive.systems.registry`): ``free_top``, ``heavy_top``, ``falling_cat`` and any
+  system registered, or configured by a scene file (a path ending ``.toml``);
+- the generic ones kept here: ``rotation``, ``angular_velocity`` (in any Euler sequence) and
+  ``inertia`` (of a standard body; needs a shape).
+
+:func:`listing` gives what can be asked of each, with the chapter's equation numbers.
 
 >>> [name for name, _, eq in listing("heavy_top")][:3]
 ['lagrangian', 'accelerations', 'p_psi']
@@ -20,15 +27,16 @@ chapter's equation numbers.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any, Callable, Iterator, Mapping
 
 import sympy as sp
 
+from ..core.codegen import ARGUMENTS
 from ..core.symbols import state_symbol, to_state_symbols
 from ..errors import InvalidInputError
-from .options import Options, body_parameters
+from .options import Options
 
-__all__ = ["ZERO", "Quantity", "System", "SYSTEMS", "ARGUMENTS", "listing", "system"]
+__all__ = ["ZERO", "Quantity", "System", "SYSTEMS", "ARGUMENTS", "GENERIC", "listing", "system", "from_derivations"]
 
 #: Marks a quantity printed as "value = 0" (no left-hand side).
 ZERO = "= 0"
@@ -56,7 +64,10 @@ class Quantity:
 
 @dataclass(frozen=True)
 class System:
-    """A system: its quantities (in listing order), those printed by default, and the options it takes."""
+    """A catalog: its quantities (in listing order), those printed by default, and the options it takes.
+
+    ``requires_shape``: a shape must be given (``inertia``); a pivot is taken where a shape is.
+    """
 
     name: str
     summary: str
@@ -64,176 +75,8 @@ class System:
     defaults: tuple[str, ...]
     takes: frozenset[str]
     parameters: Callable[[Options], dict] | None = None
+    requires_shape: bool = False
 
-
-# ------------------------------------------------------------------------------------- free top
-def _free():
-    from ..systems.free_top.model import model
-
-    return model()
-
-
-def _free_lagrangian(o: Options) -> sp.Expr:
-    from ..systems.free_top.model import I1, I2, I3
-    from .sequences import sequence_model
-
-    w = to_state_symbols(sequence_model(o.sequence, o.frame).angular_velocity_body)
-    T = sp.expand((w.T * sp.diag(I1, I2, I3) * w)[0] / 2)
-    parts = sp.collect(T, [I1, I2, I3], evaluate=False)
-    return sum(k * sp.factor(v) for k, v in parts.items())
-
-
-def _free_parameters(o: Options) -> dict:
-    from ..systems.free_top.model import I1, I2, I3
-
-    if o.shape:
-        p = body_parameters(o, default_pivot="centre")
-        return {I1: p["I1"], I2: p["I2"], I3: p["I3"]}
-    if o.moments:
-        return dict(zip((I1, I2, I3), o.moments))
-    return {}
-
-
-_FREE = {
-    "lagrangian": Quantity("the Lagrangian L = T = ½ ω_a I_ab ω_b in Euler angles of the chosen sequence", "3.18",
-                           _free_lagrangian, lambda: sp.Symbol("L")),
-    "euler_equations": Quantity("Euler's equations solved for ω̇ (free body)", "3.33",
-                                lambda o: _free().free_rhs, lambda: _symbols("omega1_dot", "omega2_dot", "omega3_dot")),
-    "energy": Quantity("kinetic energy T, conserved", "3.46", lambda o: _free().energy, lambda: sp.Symbol("T")),
-    "angular_momentum_squared": Quantity("L² = L_a L_a, conserved", "3.47",
-                                         lambda o: _free().angular_momentum_squared, lambda: sp.Symbol("L") ** 2),
-    "euler_equations_torque": Quantity("Euler's equations with a body torque τ, solved for ω̇", "3.33",
-                                       lambda o: _free().euler_rhs,
-                                       lambda: _symbols("omega1_dot", "omega2_dot", "omega3_dot")),
-    "angular_momentum": Quantity("body components L_a = I_ab ω_b", "3.28",
-                                 lambda o: to_state_symbols(_free().angular_momentum_body), lambda: _symbols("L1", "L2", "L3")),
-    "energy_gradient": Quantity("L = ∇_ω T", "3.49", lambda o: _free().energy_gradient,
-                                lambda: _symbols("L1", "L2", "L3")),
-    "symmetric_equations": Quantity("the symmetric top I2 = I1: ω̇", "3.34", lambda o: _free().symmetric_rhs,
-                                    lambda: _symbols("omega1_dot", "omega2_dot", "omega3_dot")),
-    "precession_rate": Quantity("Ω of the symmetric top's body-frame precession", "3.36",
-                                lambda o: _free().symmetric_precession_rate, lambda: sp.Symbol("Omega")),
-    "symmetric_solution": Quantity("(ω1, ω2)(t) of the symmetric top from (ω1, ω2)(0)", "3.37",
-                                   lambda o: _free().symmetric_general_solution,
-                                   lambda: sp.Matrix([sp.Symbol("omega1(t)"), sp.Symbol("omega2(t)")])),
-    "linearised": Quantity("I_a η̇_a about the steady spin ω = Ω e1", "3.42",
-                           lambda o: to_state_symbols(_free().linearised_axis1),
-                           lambda: sp.Matrix([sp.Symbol(f"I{a}") * _s(f"eta{a}_dot") for a in (1, 2, 3)])),
-    "stability_A": Quantity("A of I2 η̈2 = A η2 for a spin Ω about e1 (A > 0 unstable)", "3.44",
-                            lambda o: _free().stability_coefficient, lambda: sp.Symbol("A")),
-    "axis_stability": Quantity("A for a spin about each principal axis e1, e2, e3", "3.45",
-                               lambda o: sp.Matrix(_free().axis_stability_coefficients),
-                               lambda: sp.Matrix(sp.symbols("A_1 A_2 A_3"))),
-    "growth_squared": Quantity("s(ω): the linearised eigenvalues about a steady ω are 0, ±√s", "3.44",
-                               lambda o: _free().growth_squared, lambda: sp.Symbol("s")),
-    "symmetric_euler_rates": Quantity("(φ̇, θ̇, ψ̇) of the free symmetric top with L along ẽ3", "3.60",
-                                      lambda o: sp.Matrix([_free().symmetric_top_euler_rates_spin[_s(r)] for r in _RATES]),
-                                      lambda: _symbols(*_RATES)),
-}
-
-# ------------------------------------------------------------------------------------ heavy top
-def _heavy():
-    from ..systems.heavy_top.model import model
-
-    return model()
-
-
-def _heavy_parameters(o: Options) -> dict:
-    from ..systems.heavy_top.model import I1, I3, l
-
-    if o.shape:
-        p = body_parameters(o, default_pivot="origin")
-        if sp.simplify(p["I1"] - p["I2"]) != 0:
-            raise InvalidInputError(f"{o.label('shape')}: expected a body symmetric about axis 3 (I1 = I2), got "
-                                    f"I1 = {p['I1']}, I2 = {p['I2']} for {o.shape!r}")
-        if p["l"].is_negative:
-            raise InvalidInputError(f"{o.label('pivot' if o.pivot is not None else 'shape')}: expected the pivot "
-                                    f"below the centre of mass (l >= 0), got l = {p['l']}")
-        return {I1: p["I1"], I3: p["I3"], l: p["l"]}
-    if o.moments:
-        if o.moments[0] != o.moments[1]:
-            raise InvalidInputError(f"{o.label('moments')}: expected I1 = I2 for the symmetric heavy top, got "
-                                    f"{o.moments[0]} and {o.moments[1]}")
-        return {I1: o.moments[0], I3: o.moments[2]}
-    return {}
-
-
-def _heavy_q(attr: str) -> Callable[[Options], Any]:
-    return lambda o: to_state_symbols(getattr(_heavy(), attr))
-
-
-_HEAVY = {
-    "lagrangian": Quantity("the Lagrangian L = T − V", "3.62", _heavy_q("lagrangian"), lambda: sp.Symbol("L")),
-    "accelerations": Quantity("the Euler–Lagrange equations of (3.62) solved for (φ̈, θ̈, ψ̈)", "3.62",
-                              _heavy_q("accelerations"), lambda: _symbols("phi_ddot", "theta_ddot", "psi_ddot")),
-    "p_psi": Quantity("p_ψ = I3 ω3, conserved (ψ ignorable)", "3.63", _heavy_q("spin_momentum"),
-                      lambda: sp.Symbol("p_psi")),
-    "p_phi": Quantity("p_φ, conserved (φ ignorable)", "3.64", _heavy_q("azimuthal_momentum"),
-                      lambda: sp.Symbol("p_phi")),
-    "energy": Quantity("the energy E = T + V, conserved", "3.65", _heavy_q("energy"), lambda: sp.Symbol("E")),
-    "euler_lagrange": Quantity("d/dt ∂L/∂q̇ − ∂L/∂q for q = (φ, θ, ψ)", "3.62", _heavy_q("euler_lagrange"), ZERO),
-    "mass_matrix": Quantity("M_ij = ∂²L/∂q̇_i∂q̇_j (M q̈ = F)", "3.62", _heavy_q("mass_matrix"),
-                            lambda: sp.Symbol("M_q")),
-    "forcing": Quantity("F of M q̈ = F", "3.62", _heavy_q("forcing"), lambda: sp.Symbol("F_q")),
-    "kinetic_energy": Quantity("T = ½ ωᵀ diag(I1, I1, I3) ω with ω from (3.58)", "3.62", _heavy_q("kinetic_energy"),
-                               lambda: sp.Symbol("T")),
-    "potential_energy": Quantity("V = M g l R33", "3.62", _heavy_q("potential_energy"), lambda: sp.Symbol("V")),
-    "spin": Quantity("the spin ω3 = ψ̇ + φ̇ cos θ", "3.63", _heavy_q("spin"), lambda: _s("omega3")),
-    "constants": Quantity("a = I3ω3/I1, b = p_φ/I1, α = 2E'/I1, β = 2Mgl/I1 at the state", "3.72",
-                          lambda o: sp.Matrix(list(_heavy().constants_from_state.values())),
-                          lambda: sp.Matrix(list(_heavy().constants_from_state.keys()))),
-    "precession_rate_theta": Quantity("φ̇(θ) from the conserved momenta", "3.67", _heavy_q("precession_rate_theta"),
-                                      lambda: _s("phi_dot")),
-    "spin_rate_theta": Quantity("ψ̇(θ) from the conserved momenta", "3.68", _heavy_q("spin_rate_theta"),
-                                lambda: _s("psi_dot")),
-    "reduced_energy": Quantity("E' = E − ½ I3 ω3² in θ, θ̇", "3.69", _heavy_q("reduced_energy"),
-                               lambda: sp.Symbol("E'")),
-    "effective_potential": Quantity("V_eff(θ)", "3.70", _heavy_q("effective_potential_theta"),
-                                    lambda: sp.Symbol("V_eff")),
-    "f_u": Quantity("f(u) with u̇² = f(u), u = cos θ", "3.73", _heavy_q("f_u"),
-                    lambda: sp.Function("f")(sp.Symbol("u", real=True))),
-    "precession_rate_u": Quantity("φ̇(u)", "3.74", _heavy_q("precession_rate_u"), lambda: _s("phi_dot")),
-    "spin_rate_u": Quantity("ψ̇(u)", "3.75", _heavy_q("spin_rate_u"), lambda: _s("psi_dot")),
-    "f_at_poles": Quantity("(f(1), f(−1)) ≤ 0", "3.76", lambda o: sp.Matrix(_heavy().f_at_poles),
-                           lambda: sp.Matrix([sp.Function("f")(1), sp.Function("f")(-1)])),
-    "released_u": Quantity("u at release (θ̇ = φ̇ = 0)", "3.77", _heavy_q("released_u"), lambda: sp.Symbol("u0")),
-    "released_p_phi": Quantity("p_φ of a top released with φ̇ = 0", "3.78", _heavy_q("released_azimuthal_momentum"),
-                               lambda: sp.Symbol("p_phi")),
-    "uniform_precession": Quantity("the condition for precession without nutation at θ0", "3.80",
-                                   lambda o: _heavy().uniform_precession_condition.rhs,
-                                   lambda: _heavy().uniform_precession_condition.lhs),
-    "precession_rates": Quantity("the slow and fast uniform precession rates φ̇ solving (3.80), slow the smaller |φ̇| "
-                                 "(cancellation-free: M g l/(I3 ω3) at θ0 = π/2)", "3.80",
-                                 lambda o: sp.Matrix(_heavy().precession_rates),
-                                 lambda: sp.Matrix(sp.symbols("phidot_slow phidot_fast"))),
-    "minimum_spin": Quantity("the least spin ω3 for uniform precession at θ0 (0 for θ0 ≥ π/2: any spin)", "3.81", _heavy_q("minimum_spin"),
-                             lambda: sp.Symbol("omega_3min")),
-    "sleeping_f": Quantity("f(u) of the sleeping top, θ = θ̇ = 0", "3.83", _heavy_q("sleeping_f"),
-                           lambda: sp.Function("f")(sp.Symbol("u", real=True))),
-    "sleeping_threshold_spin": Quantity("the spin below which the sleeping top is unstable", "3.83",
-                                        _heavy_q("sleeping_threshold_spin"), lambda: sp.Symbol("omega_3c")),
-}
-
-# ---------------------------------------------------------------------------------- falling cat
-def _cat():
-    from ..systems.deformable.cat import cat_body
-
-    return cat_body()
-
-
-_CAT = {
-    "Omega_bend": Quantity("gauge potential Ω_A for A = bend (Ω = Ω_A ẋ^A at L = 0)", "3.87",
-                           lambda o: _cat().connection[0], lambda: sp.Symbol("Omega_bend")),
-    "Omega_swivel": Quantity("gauge potential Ω_A for A = swivel", "3.87",
-                             lambda o: _cat().connection[1], lambda: sp.Symbol("Omega_swivel")),
-    "field_strength": Quantity("F_AB, A = bend, B = swivel (as corrected in catalog 3.7)", "3.103",
-                               lambda o: _cat().field_strength[0][1], lambda: sp.Symbol("F_bend,swivel")),
-    "angular_velocity": Quantity("Ω = R⁻¹Ṙ = hat(Ĩ⁻¹ L̃) at L = 0", "3.92",
-                                 lambda o: _cat().angular_velocity, lambda: sp.Symbol("Omega")),
-    "inertia_tensor": Quantity("Ĩ of the shape", "3.93", lambda o: _cat().inertia_tensor, lambda: sp.Symbol("Itilde")),
-    "apparent_angular_momentum": Quantity("L̃ of the shape change", "3.94",
-                                          lambda o: _cat().apparent_angular_momentum, lambda: sp.Symbol("Ltilde")),
-}
 
 # ------------------------------------------------------------------------- rotation, angular velocity
 def _kin(o: Options):
@@ -300,77 +143,128 @@ _INERTIA = {
 }
 
 _NUMBERS = frozenset({"values"})
-SYSTEMS: dict[str, System] = {
-    "free_top": System("free_top", "the free rigid body in principal axes (sections 3.3–3.5)", _FREE,
-                       ("lagrangian", "euler_equations", "energy", "angular_momentum_squared"),
-                       _NUMBERS | {"sequence", "shape", "moments"}, _free_parameters),
-    "heavy_top": System("heavy_top", "the heavy symmetric top (section 3.6)", _HEAVY,
-                        ("lagrangian", "accelerations", "p_psi", "p_phi", "energy"),
-                        _NUMBERS | {"shape", "moments"}, _heavy_parameters),
-    "falling_cat": System("falling_cat", "the falling cat, two jointed halves (section 3.7)", _CAT,
-                          ("Omega_bend", "Omega_swivel", "field_strength"), _NUMBERS),
+#: The generic catalogs (not systems): rotations, angular velocities and inertia of shapes.
+GENERIC: dict[str, System] = {
     "rotation": System("rotation", "rotation matrices of Euler angles (section 3.5)", _ROTATION, ("R",),
                        _NUMBERS | {"sequence"}),
     "angular_velocity": System("angular_velocity", "angular velocity in Euler angles (sections 3.1.1, 3.5.2)",
                                _ANGULAR, ("body", "space"), _NUMBERS | {"sequence"}),
     "inertia": System("inertia", "inertia of a standard body SHAPE (section 3.2)", _INERTIA,
-                      ("centre_of_mass", "inertia_cm", "inertia_pivot"), _NUMBERS | {"shape"}),
+                      ("centre_of_mass", "inertia_cm", "inertia_pivot"), _NUMBERS | {"shape"}, requires_shape=True),
 }
 
-
-def system(name: str) -> System:
-    """The :class:`System` called ``name``; raises listing the systems otherwise."""
-    if name not in SYSTEMS:
-        raise InvalidInputError(f"expected a system among {', '.join(SYSTEMS)}, got {name!r}")
-    return SYSTEMS[name]
+# What a Derivation's ``options`` may name (a pivot goes with a shape).
+_OPTIONS = frozenset({"sequence", "shape", "moments"})
 
 
-def listing(name: str) -> list[tuple[str, str, str]]:
+def _short(text: str, limit: int = 60) -> str:
+    return text if len(text) <= limit else text[: limit - 1] + "…"
+
+
+def _merged(substitutes: list[Callable[[Options], Mapping]]) -> Callable[[Options], dict] | None:
+    if not substitutes:
+        return None
+
+    def parameters(options: Options) -> dict:
+        out: dict = {}
+        for f in substitutes:
+            out.update(f(options))
+        return out
+    return parameters
+
+
+def from_derivations(obj: Any) -> System:
+    """The catalog of a system object (a :class:`~mechderive.systems.base.System`): its ``derivations()``,
+    titled by their ``summary`` (:class:`~mechderive.systems.base.Derivations`) or the system's.
+
+    Raises :class:`InvalidInputError` naming the system where a derivation is malformed (a name
+    that is not an identifier or is repeated, an unknown option) or where it has none.
+    """
+    name = getattr(obj, "name", "?")
+    given = obj.derivations() or ()
+    derivations = tuple(given)
+    if not derivations:
+        raise InvalidInputError(f"expected a system with derivations for derive, got {name!r}, which has none")
+    quantities: dict[str, Quantity] = {}
+    takes, substitutes = set(_NUMBERS), []
+    for d in derivations:
+        if not isinstance(getattr(d, "name", None), str) or not d.name.isidentifier() or d.name in quantities:
+            raise InvalidInputError(f"expected distinct identifiers as the names of {name}'s derivations, got "
+                                    f"{getattr(d, 'name', d)!r}")
+        unknown = set(d.options) - _OPTIONS
+        if unknown:
+            raise InvalidInputError(f"expected the options of {name}'s derivation {d.name!r} among "
+                                    f"{', '.join(sorted(_OPTIONS))}, got {sorted(unknown)[0]!r}")
+        if d.lhs is None:
+            lhs = lambda n=d.name: sp.Symbol(n)  # noqa: E731
+        elif isinstance(d.lhs, str):
+            if d.lhs != ZERO:
+                raise InvalidInputError(f"expected the left-hand side of {name}'s derivation {d.name!r} to be a "
+                                        f"callable, a SymPy object or {ZERO!r}, got {_short(repr(d.lhs))}")
+            lhs = ZERO
+        else:
+            lhs = d.lhs if callable(d.lhs) and not isinstance(d.lhs, sp.Basic) else (lambda v=d.lhs: v)
+        quantities[d.name] = Quantity(d.meaning, d.equation, d.build, lhs)
+        takes |= set(d.options)
+        if d.substitute is not None and d.substitute not in substitutes:
+            substitutes.append(d.substitute)
+    defaults = tuple(d.name for d in derivations if d.default) or tuple(quantities)
+    summary = getattr(given, "summary", "") or getattr(obj, "summary", "") or ""
+    return System(name, summary, quantities, defaults, frozenset(takes), _merged(substitutes))
+
+
+def _derivable(obj: Any) -> bool:
+    return bool(obj.derivations())
+
+
+def names() -> tuple[str, ...]:
+    """What ``derive`` knows by name: the registered systems with derivations, then the generic catalogs."""
+    from ..formulas.systems import names as registered
+
+    return registered(_derivable) + tuple(GENERIC)
+
+
+def system(name: Any) -> System:
+    """The catalog of ``name``: a generic catalog, a registered system's name, a scene file (a path
+    ending ``.toml``) or a system object; raises listing the systems otherwise."""
+    from ..formulas.systems import find_system, is_scene_path
+
+    from ..systems import registry
+
+    if isinstance(name, str) and name in GENERIC:
+        return GENERIC[name]
+    if isinstance(name, str) and not is_scene_path(name) and name not in registry.names():
+        raise InvalidInputError(f"expected a system among {', '.join(names())}, got {name!r}")
+    obj, _ = find_system(name)
+    return from_derivations(obj)
+
+
+class _Systems(Mapping):
+    """{name: catalog} of every system and generic catalog, looked up through the registry on access
+    (an unknown name raises :class:`InvalidInputError` listing the known ones)."""
+
+    def __getitem__(self, name: str) -> System:
+        if not isinstance(name, str) or name not in names():
+            raise InvalidInputError(f"expected a system among {', '.join(names())}, got {_short(repr(name))}")
+        return system(name)
+
+    def __contains__(self, name: object) -> bool:
+        return isinstance(name, str) and name in names()
+
+    def get(self, name: str, default: Any = None) -> Any:
+        return self[name] if name in self else default
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(names())
+
+    def __len__(self) -> int:
+        return len(names())
+
+
+#: Every catalog by name (the registered systems' through the registry, then the generic ones).
+SYSTEMS: Mapping[str, System] = _Systems()
+
+
+def listing(name: Any) -> list[tuple[str, str, str]]:
     """[(quantity, description, equation number)] of a system, defaults first."""
     return [(q, spec.description, spec.equation) for q, spec in system(name).quantities.items()]
-
-
-#: Argument names in the order generated functions take them, with their meaning and unit
-#: (any consistent set of units; "length" etc. name the dimension).  Names not listed follow,
-#: sorted.
-ARGUMENTS: dict[str, tuple[str, str]] = {
-    "I1": ("principal moment of inertia about e1", "mass·length²"),
-    "I2": ("principal moment of inertia about e2", "mass·length²"),
-    "I3": ("principal moment of inertia about e3", "mass·length²"),
-    "M": ("mass", "mass"),
-    "g": ("gravitational acceleration", "length/time²"),
-    "l": ("distance from the pivot to the centre of mass (heavy top) or rod length", "length"),
-    "R": ("radius", "length"),
-    "h": ("height", "length"),
-    "a": ("a = I3 ω3/I1 (3.66), or the cuboid's or ellipsoid's first dimension", "1/time or length"),
-    "b": ("b = p_φ/I1 (3.66), or the second dimension", "1/time or length"),
-    "c": ("the cuboid's or ellipsoid's third dimension", "length"),
-    "alpha": ("α = 2E'/I1 (3.72), or a rotation angle", "1/time² or rad"),
-    "beta": ("β = 2Mgl/I1 (3.72)", "1/time²"),
-    "half_mass": ("mass of each half of the cat", "mass"),
-    "joint_offset": ("distance from the waist joint to each half's centre", "length"),
-    "radius": ("radius of each half's ring of masses", "length"),
-    "half_length": ("axial half-length of each half", "length"),
-    "phi": ("first Euler angle φ", "rad"),
-    "theta": ("second Euler angle θ", "rad"),
-    "psi": ("third Euler angle ψ", "rad"),
-    "bend": ("bend angle of the cat", "rad"),
-    "swivel": ("swivel angle of the cat's bending axis", "rad"),
-    "phi_dot": ("φ̇", "rad/time"),
-    "theta_dot": ("θ̇", "rad/time"),
-    "psi_dot": ("ψ̇", "rad/time"),
-    "bend_dot": ("rate of bend", "rad/time"),
-    "swivel_dot": ("rate of swivel", "rad/time"),
-    "omega1": ("body component ω1 of the angular velocity", "rad/time"),
-    "omega2": ("body component ω2", "rad/time"),
-    "omega3": ("body component ω3 (the spin)", "rad/time"),
-    "tau1": ("body component τ1 of the torque", "mass·length²/time²"),
-    "tau2": ("body component τ2 of the torque", "mass·length²/time²"),
-    "tau3": ("body component τ3 of the torque", "mass·length²/time²"),
-    "u": ("u = cos θ (3.71)", "1"),
-    "u0": ("u at release or of uniform precession", "1"),
-    "theta0": ("θ of uniform precession", "rad"),
-    "p_phi": ("conserved momentum p_φ", "mass·length²/time"),
-    "p_psi": ("conserved momentum p_ψ", "mass·length²/time"),
-    "Omega": ("spin rate Ω (3.40) or precession rate Ω (3.36)", "rad/time"),
-}

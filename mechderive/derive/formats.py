@@ -18,7 +18,9 @@ One function per format, each taking SymPy objects:
 
 :func:`render` puts a list of :class:`~mechderive.derive.api.Derived` together in one format.
 Arguments of generated code default to :func:`argument_order`: the parameters, then the state,
-then any other symbol by name (see :data:`mechderive.derive.catalog.ARGUMENTS`).
+then any other symbol by name (see :data:`mechderive.core.codegen.ARGUMENTS`).  The code
+generators live in :mod:`mechderive.core.codegen` (below the solvers, which compile with them)
+and are re-exported here.
 
 >>> import sympy as sp
 >>> x = sp.Symbol("theta_dot")
@@ -33,11 +35,11 @@ import keyword
 from typing import Any, Mapping, Sequence
 
 import sympy as sp
-from sympy.core.function import AppliedUndef
 
+from ..core.codegen import (_checked, _flat, _identifiers, _inert, argument_order, to_c_source,  # noqa: F401
+                             to_python_source)
 from ..core.display import display_symbols
 from ..errors import InvalidInputError
-from ..formulas.parse import as_expression
 
 __all__ = ["FORMATS", "argument_order", "to_text", "to_latex", "to_sympy_source", "to_python_source",
            "to_c_source", "to_json", "render"]
@@ -46,42 +48,7 @@ __all__ = ["FORMATS", "argument_order", "to_text", "to_latex", "to_sympy_source"
 FORMATS = ("text", "latex", "sympy", "python", "c", "json")
 
 
-def _flat(expr: Any) -> tuple[list[sp.Expr], tuple[int, ...]]:
-    if isinstance(expr, sp.MatrixBase):
-        return list(expr), tuple(expr.shape)
-    return [as_expression(expr, "the expression")], ()
-
-
-def _check_printable(flat: Sequence[sp.Expr]) -> None:
-    for e in flat:
-        bad = e.atoms(AppliedUndef, sp.Derivative)
-        if bad:
-            raise InvalidInputError(f"expected expressions in plain symbols for code, got {sorted(map(str, bad))[0]}")
-
-
-def argument_order(exprs: Any) -> list[sp.Symbol]:
-    """The free symbols of ``exprs`` in the order generated functions take them.
-
-    >>> import sympy as sp
-    >>> argument_order(sp.Symbol("theta") + sp.Symbol("I1") + sp.Symbol("zeta"))
-    [I1, theta, zeta]
-    """
-    from .catalog import ARGUMENTS
-
-    items = exprs.values() if isinstance(exprs, Mapping) else (exprs if isinstance(exprs, (list, tuple)) else [exprs])
-    free: set[sp.Symbol] = set()
-    for e in items:
-        free |= set(_checked(e, "each expression").free_symbols)
-    rank = {n: i for i, n in enumerate(ARGUMENTS)}
-    return sorted(free, key=lambda s: (rank.get(s.name, len(rank)), s.name))
-
-
 # ------------------------------------------------------------------------------ text and LaTeX
-def _checked(value: Any, what: str) -> Any:
-    """A matrix as it is, anything else through :func:`as_expression` (text is never evaluated)."""
-    return value if isinstance(value, sp.MatrixBase) else as_expression(value, what)
-
-
 def _equation(expr: Any, lhs: Any) -> Any:
     expr = _checked(expr, "the expression")
     if lhs is not None and not isinstance(lhs, str):
@@ -140,19 +107,6 @@ def _text_block(d: Any, cse: bool, latex: bool) -> str:
 
 
 # ------------------------------------------------------------------------------ SymPy source
-def _identifiers(symbols: Sequence[sp.Symbol], reserved: set[str]) -> dict[sp.Symbol, str]:
-    out, used = {}, set()
-    for s in sorted(symbols, key=lambda s: s.name):
-        name = "".join(c if (c.isalnum() or c == "_") else "_" for c in s.name)
-        if not name or name[0].isdigit():
-            name = "_" + name
-        while keyword.iskeyword(name) or name in reserved or name in used:
-            name += "_"
-        out[s] = name
-        used.add(name)
-    return out
-
-
 def to_sympy_source(exprs: Mapping[str, Any], *, comments: Mapping[str, str] | None = None) -> str:
     """Python source that rebuilds ``{name: SymPy object}`` exactly (symbols with their assumptions).
 
@@ -192,144 +146,6 @@ def to_sympy_source(exprs: Mapping[str, Any], *, comments: Mapping[str, str] | N
     return "\n".join(lines)
 
 
-# ------------------------------------------------------------------------------ code
-def _argument_lines(args: Sequence[sp.Symbol], names: Mapping[sp.Symbol, str], prefix: str) -> list[str]:
-    from .catalog import ARGUMENTS
-
-    width = max((len(names[a]) for a in args), default=0)
-    out = []
-    for a in args:
-        meaning, unit = ARGUMENTS.get(a.name, ("", ""))
-        text = f"{meaning} [{unit}]" if meaning else ""
-        alias = "" if names[a] == a.name else f" (symbol {a.name})"
-        out.append(f"{prefix}{names[a]:<{width}}  {text}{alias}".rstrip())
-    return out
-
-
-def _check_args(flat: Sequence[sp.Expr], args: Sequence[Any]) -> list[sp.Symbol]:
-    args = list(args)
-    for a in args:
-        if not isinstance(a, sp.Symbol):
-            raise InvalidInputError(f"expected the arguments to be SymPy symbols, got {a!r}")
-    if len(set(args)) != len(args):
-        raise InvalidInputError(f"expected distinct arguments, got {[str(a) for a in args]}")
-    free = set().union(*(e.free_symbols for e in flat)) if flat else set()
-    missing = sorted(str(s) for s in free - set(args))
-    if missing:
-        raise InvalidInputError(f"expected the arguments to include every free symbol, got {', '.join(missing)} missing")
-    return args
-
-
-_PY_RESERVED = {"numpy", "_values", "_shape"}
-
-
-def _numpy_printer_class() -> type:
-    """SymPy's NumPyPrinter, with Max and Min as nested numpy.maximum/minimum: SymPy prints them
-    with ``functools.reduce``, which the generated module (``import numpy`` only) would not have."""
-    from sympy.printing.numpy import NumPyPrinter
-
-    class _Printer(NumPyPrinter):
-        def _fold(self, expr: sp.Expr, func: str) -> str:
-            args = [self._print(a) for a in expr.args]
-            out = args[0]
-            for a in args[1:]:
-                out = f"numpy.{func}({out}, {a})"
-            return out
-
-        def _print_Max(self, expr: sp.Expr) -> str:
-            return self._fold(expr, "maximum")
-
-        def _print_Min(self, expr: sp.Expr) -> str:
-            return self._fold(expr, "minimum")
-
-    return _Printer
-
-
-def to_python_source(exprs: Any, args: Sequence[Any] | None = None, name: str = "f", *, doc: str = "",
-                     imports: bool = True) -> str:
-    """Source of a standalone NumPy function ``name(*args)`` evaluating ``exprs`` (scalar or Matrix).
-
-    ``import numpy`` (unless ``imports=False``), then the function: its docstring starts with
-    ``doc`` and lists the arguments in order (default :func:`argument_order`) with their units;
-    the body is cse'd.  A Matrix of shape S at arguments broadcasting to B gives an array B + S.
-
-    >>> import sympy as sp
-    >>> x, y = sp.symbols("x y")
-    >>> ns = {}; exec(to_python_source(sp.Matrix([x * y, sp.sin(x * y)]), [x, y], "g"), ns)
-    >>> ns["g"](2.0, 0.25).round(6).tolist()
-    [[0.5], [0.479426]]
-    """
-    _NumPyPrinter = _numpy_printer_class()
-    flat, shape = _flat(exprs)
-    _check_printable(flat)
-    args = _check_args(flat, argument_order(exprs) if args is None else args)
-    if not name.isidentifier() or keyword.iskeyword(name):
-        raise InvalidInputError(f"expected a Python identifier for the function name, got {name!r}")
-    names = _identifiers(args, _PY_RESERVED | {name})
-    plain = {a: sp.Symbol(names[a]) for a in args}
-    repl, reduced = sp.cse([e.xreplace(plain) for e in flat], symbols=sp.numbered_symbols("_x"))
-    printer = _NumPyPrinter({"fully_qualified_modules": True, "allow_unknown_functions": False})
-    body = [f"    {s} = {printer.doprint(e)}" for s, e in repl]
-    entries = [printer.doprint(e) for e in reduced]
-    if shape:
-        body.append("    _values = numpy.broadcast_arrays(" +
-                    ", ".join(f"numpy.asarray({e}, dtype=float)" for e in entries) + ")")
-        body.append(f"    return numpy.stack(_values, axis=-1).reshape(_values[0].shape + {shape!r})")
-        returns = f"float array of shape (*broadcast, {', '.join(map(str, shape))}), entries row-major"
-    else:
-        body.append(f"    return numpy.asarray({entries[0]}, dtype=float)")
-        returns = "float array of the arguments' broadcast shape"
-    lines = (doc.rstrip().splitlines() + [""]) if doc else []
-    lines += ["Arguments, in order (any consistent units):", *_argument_lines(args, names, "    "), "",
-              f"Returns a {returns}.", "Generated by mechderive from its SymPy derivation (cse'd)."]
-    lines = [_inert(line) for line in lines]
-    docstring = ['    """' + lines[0]] + [f"    {line}" if line else "" for line in lines[1:]] + ['    """']
-    head = f"def {name}({', '.join(names[a] for a in args)}):"
-    return "\n".join((["import numpy", "", ""] if imports else []) + [head, *docstring, *body]) + "\n"
-
-
-_C_RESERVED = {
-    "auto", "break", "case", "char", "const", "continue", "default", "do", "double", "else", "enum", "extern",
-    "float", "for", "goto", "if", "inline", "int", "long", "register", "restrict", "return", "short", "signed",
-    "sizeof", "static", "struct", "switch", "typedef", "union", "unsigned", "void", "volatile", "while", "out",
-    # <math.h> (C99 and POSIX) names an argument must not shadow
-    "acos", "asin", "atan", "atan2", "cos", "sin", "tan", "cosh", "sinh", "tanh", "exp", "log", "log10", "pow",
-    "sqrt", "ceil", "floor", "fabs", "fmod", "gamma", "lgamma", "tgamma", "erf", "erfc", "j0", "j1", "jn", "y0",
-    "y1", "yn", "hypot", "cbrt", "round", "trunc", "signbit", "isnan", "isinf", "nan", "remainder", "scalb",
-}
-
-
-def to_c_source(exprs: Any, args: Sequence[Any] | None = None, name: str = "f", *, doc: str = "",
-                include: bool = True) -> str:
-    """Source of a C99 function ``void name(double arg, ..., double *out)`` writing the entries of ``exprs``.
-
-    ``out`` receives the entries row-major (one for a scalar, 9 for a 3×3 matrix); the body is
-    cse'd; a header comment (starting with ``doc``) lists the arguments in order and their units.
-    Needs ``<math.h>`` (included unless ``include=False``) and ``-lm``.
-    """
-    flat, shape = _flat(exprs)
-    _check_printable(flat)
-    args = _check_args(flat, argument_order(exprs) if args is None else args)
-    if not name.isidentifier() or name in _C_RESERVED:
-        raise InvalidInputError(f"expected a C identifier for the function name, got {name!r}")
-    names = _identifiers(args, _C_RESERVED | {name})
-    plain = {a: sp.Symbol(names[a]) for a in args}
-    repl, reduced = sp.cse([e.xreplace(plain) for e in flat], symbols=sp.numbered_symbols("cse_"))
-    layout = " x ".join(map(str, shape)) if shape else "scalar"
-    comment = ["/*"]
-    comment += [f" * {_inert(line)}".rstrip() for line in doc.strip().splitlines()] if doc else []
-    comment += [" *", " * Arguments, in order (any consistent units):",
-                *(_inert(line) for line in _argument_lines(args, names, " *   ")),
-                f" * Output: out[0 .. {len(flat) - 1}], the {layout} result"
-                + (f" row-major: entry (i, j) at out[{shape[1]}*i + j]." if len(shape) == 2 else "."),
-                " * Generated by mechderive from its SymPy derivation (cse'd).", " */"]
-    params = ", ".join([f"double {names[a]}" for a in args] + ["double *out"])
-    body = [f"    const double {s} = {sp.ccode(e, standard='C99')};" for s, e in repl]
-    body += [f"    out[{i}] = {sp.ccode(e, standard='C99')};" for i, e in enumerate(reduced)]
-    return "\n".join(comment + (["#include <math.h>", ""] if include else []) +
-                     [f"void {name}({params})", "{", *body, "}"]) + "\n"
-
-
 # ------------------------------------------------------------------------------ JSON and documents
 def to_json(entries: Sequence[Any], *, header: Mapping[str, Any] | None = None) -> str:
     """JSON: ``header`` and, per quantity, its description, equation, text, LaTeX, ``str`` and ``srepr``."""
@@ -366,18 +182,6 @@ def _doc(d: Any, system: str, fname: str) -> str:
         text += "\n\n" + _SCIPY_EXAMPLE.format(seq=d.sequence, frame=d.frame, scipy=scipy_sequence(d.sequence, d.frame),
                                                 fname=fname, var=d.name, T=".T" if d.name == "R" else "")
     return text
-
-
-def _inert(title: str) -> str:
-    """``title`` made safe in a comment or docstring of every format: one line (no line break of any
-    kind), no ``*/`` to close a C comment, no triple quote or backslash in a Python docstring.
-
-    >>> _inert("a\\nimport os */ " + '"' * 3 + " x\\\\y")
-    "a import os * / ''' x/y"
-    """
-    flat = " ".join(title.splitlines())
-    flat = "".join(c if c.isprintable() else " " for c in flat)
-    return flat.replace("*/", "* /").replace('"""', "'''").replace("\\", "/")
 
 
 def render(entries: Sequence[Any], fmt: str = "text", *, system: str = "", summary: str = "",

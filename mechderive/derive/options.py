@@ -306,6 +306,10 @@ class Options:
         """The pivot's coordinate z on axis 3 as a SymPy expression (None if not given)."""
         return self.pivot
 
+    def body_parameters(self, *, default_pivot: str) -> dict[str, sp.Expr]:
+        """:func:`body_parameters` of these options: what a system's ``Derivation.substitute`` calls."""
+        return body_parameters(self, default_pivot=default_pivot)
+
 
 def body_parameters(options: Options, *, default_pivot: str) -> dict[str, sp.Expr]:
     """{"I1", "I2", "I3", "l", "pivot"} of the shape about its pivot (``default_pivot`` "origin" or "centre").

@@ -81,6 +81,7 @@ within the budget (its expansion along the motion alone takes about 15 s).
 from __future__ import annotations
 
 import math
+import os
 import random
 import re
 from dataclasses import dataclass
@@ -99,7 +100,8 @@ from .parse import MAX_LENGTH, dt
 from .sampling import Draw, PointSampler, decimal_text
 from .significance import Comparison, compare
 from .size import brief, tree_size
-from .systems import SYSTEMS, System, get_system
+from ..systems.base import System as SystemBase
+from .systems import System, checkable, get_system
 
 __all__ = ["Verdict", "check", "EXIT_STATUS", "MAX_NODES", "MAX_UNTIMED_NODES", "MAX_INPUT_NODES",
            "MAX_INPUT_DEPTH", "MAX_BUDGET"]
@@ -447,9 +449,13 @@ def _check_options(points: object, seed: object, budget: object, any_moments: ob
         raise InvalidInputError(f"any_moments: expected True or False, got {_shown(any_moments)}")
 
 
-def check(claim: str, system: str = "heavy_top", *, given: Sequence[str] = (), points: int = 20,
+def check(claim: str, system: Any = "heavy_top", *, given: Sequence[str] = (), points: int = 20,
           seed: int = 20261121, budget: float = 5.0, any_moments: bool = False) -> Verdict:
-    """Decide ``claim`` ("LHS = RHS") for ``system`` ("heavy_top" or "free_top"); see the module docstring.
+    """Decide ``claim`` ("LHS = RHS") for ``system``; see the module docstring.
+
+    ``system``: a registered system's name ("heavy_top", "free_top", or one registered with
+    :func:`mechderive.systems.registry.register` whose ``check_system()`` gives its symbols), a
+    scene file (a path ending ``.toml``: the system it configures), or a system object.
 
     ``given``: "name = expression" entries (new names or specialisations); ``points``: random
     points of the numeric method (20 to 1000); ``seed``: their seed; ``budget``: the seconds of
@@ -467,8 +473,8 @@ def check(claim: str, system: str = "heavy_top", *, given: Sequence[str] = (), p
     that grows beyond :data:`MAX_NODES` nodes while being expanded is ``undecided``.
     """
     _check_options(points, seed, budget, any_moments)
-    if not isinstance(system, str):
-        raise InvalidInputError(f"system: expected a name among {', '.join(sorted(SYSTEMS))}, got {_shown(system)}")
+    if not isinstance(system, (str, os.PathLike, System, SystemBase)):
+        raise InvalidInputError(f"system: expected a name among {', '.join(checkable())}, got {_shown(system)}")
     try:
         sys_ = get_system(system)
     except InvalidInputError as exc:
@@ -531,8 +537,7 @@ def _check(claim: str, sys_: System, given: Sequence[str], clock: Budget, *, poi
                        on_motion=False)
     on = clock.run("expanding dt(...) along the motion (the equations of motion substituted)",
                    lambda: _sides(lhs, rhs, sys_, specs, on_motion=True, clock=clock))
-    motion = {"heavy_top": "θ̈, φ̈, ψ̈ from the Euler–Lagrange equations of L = T − V",
-              "free_top": "ω̇ from Euler's equations (3.33) without torque"}[sys_.name]
+    motion = sys_.motion
     result = _decide(*on, sys_, clock=clock, proof_share=0.5, **opts)
     where = f"; on a motion: {motion}{used}"
     if result.kind == "zero":

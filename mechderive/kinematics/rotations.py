@@ -26,9 +26,9 @@ _RATES = ("phi", "theta", "psi", "phi_dot", "theta_dot", "psi_dot")
 def _build(quantity: str, names: tuple[str, ...]) -> Callable[[], tuple]:
     def build():
         from ..core.symbols import state_symbol
-        from . import euler
+        from . import euler_symbolic
 
-        expr = getattr(euler.model(), quantity)
+        expr = getattr(euler_symbolic.model(), quantity)
         return [state_symbol(n) for n in names], expr
     return build
 
@@ -38,16 +38,51 @@ def _function(quantity: str, names: tuple[str, ...]) -> Callable[..., np.ndarray
     return compile_cached(f"kinematics.{quantity}", _build(quantity, names))
 
 
-def rotation_matrix(phi: Any, theta: Any, psi: Any) -> np.ndarray:
-    """Numeric R(φ, θ, ψ) of (3.54), vectorised: arrays broadcast, result shape (..., 3, 3).
+_ZERO, _ONE = 0, 1  # exact entries of the elementary rotations: skipped or not multiplied in a product
 
-    Angles in radians.
+
+def _axis_rotation(axis: int, angle: np.ndarray) -> list[list[Any]]:
+    """The passive rotation R_a(α) about axis 1 or 3 ((3.51), (3.52)) as nested rows of entries (arrays
+    or the exact 0 and 1): the numeric form of exp(α J_a) derived in
+    :func:`mechderive.kinematics.euler_symbolic.axis_rotation`."""
+    c, s = np.cos(angle), np.sin(angle)
+    m: list[list[Any]] = [[_ONE if i == j else _ZERO for j in range(3)] for i in range(3)]
+    i, j = (1, 2) if axis == 1 else (0, 1)
+    m[i][i], m[j][j], m[i][j], m[j][i] = c, c, s, -s
+    return m
+
+
+def _product(a: list[list[Any]], b: list[list[Any]]) -> list[list[Any]]:
+    """The matrix product of nested rows, term by term on arrays, skipping exact zeros and ones."""
+    out = []
+    for i in range(3):
+        row = []
+        for j in range(3):
+            terms = [x if y is _ONE else y if x is _ONE else x * y
+                     for x, y in ((a[i][k], b[k][j]) for k in range(3)) if x is not _ZERO and y is not _ZERO]
+            row.append(_ZERO if not terms else functools.reduce(np.add, terms))
+        out.append(row)
+    return out
+
+
+def rotation_matrix(phi: Any, theta: Any, psi: Any) -> np.ndarray:
+    """Numeric R(φ, θ, ψ) = R3(ψ) R1(θ) R3(φ) of (3.54), vectorised: arrays broadcast, result shape (..., 3, 3).
+
+    Angles in radians.  Pure NumPy (no SymPy, no compiled code): the product of the three
+    elementary rotations, agreeing with the derived R of :mod:`mechderive.kinematics.euler_symbolic`
+    to an ulp or two (``tests/test_kinematics_numeric.py``).
 
     >>> np.allclose(rotation_matrix(0.3, 0.0, 0.4), rotation_matrix(0.7, 0.0, 0.0))
     True
     """
-    f = _function("state_rotation", ("phi", "theta", "psi"))
-    return f(as_finite_array(phi, "phi"), as_finite_array(theta, "theta"), as_finite_array(psi, "psi"))
+    phi, theta, psi = np.broadcast_arrays(as_finite_array(phi, "phi"), as_finite_array(theta, "theta"),
+                                          as_finite_array(psi, "psi"))
+    rows = _product(_product(_axis_rotation(3, psi), _axis_rotation(1, theta)), _axis_rotation(3, phi))
+    out = np.empty(phi.shape + (3, 3))
+    for i in range(3):
+        for j in range(3):
+            out[..., i, j] = rows[i][j]
+    return out
 
 
 def _rates(quantity: str, values: tuple) -> np.ndarray:

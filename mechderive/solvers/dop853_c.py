@@ -458,7 +458,7 @@ def dop853_c_source(exprs: Any, state: Sequence[Any], params: Sequence[Any], *, 
     """
     from scipy.integrate._ivp import dop853_coefficients as coef
 
-    from ..derive.formats import to_c_source
+    from ..core.codegen import to_c_source
 
     n, n_par = len(state), len(params)
     fn = f"{name}_rhs_expr"

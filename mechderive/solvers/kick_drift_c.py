@@ -102,7 +102,7 @@ _DONE, _NONFINITE, _CHUNK = 0, 1, 2
 
 
 def _source(exprs: Any, state: Sequence[Any], h_drift: Any, h_kick: Any, params: Sequence[Any], name: str) -> str:
-    from ..derive.formats import to_c_source
+    from ..core.codegen import to_c_source
 
     fn = f"{name}_stage_expr"
     n, n_par = len(state), len(params)

@@ -43,7 +43,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..scenes.schema import Scene
     from ..scenes.units import Scaled
 
-__all__ = ["Key", "Quantity", "Solved", "OutOfReach", "System", "Derivation"]
+__all__ = ["Key", "Quantity", "Solved", "OutOfReach", "System", "Derivation", "Derivations"]
 
 
 @dataclass(frozen=True)
@@ -93,12 +93,41 @@ class OutOfReach(InvalidInputError):
 @dataclass(frozen=True)
 class Derivation:
     """One quantity ``derive`` can print: its name, a one-line meaning, the chapter's equation (or ""),
-    and ``build(options)`` returning the SymPy expression, matrix or equation list."""
+    and ``build(options)`` returning the SymPy expression, matrix or equation list.
+
+    ``options`` is :class:`mechderive.derive.options.Options` (``sequence``, ``frame``, ``shape``,
+    ``pivot``, ``moments``, ``values``, ``label(option)``, ``body_parameters(default_pivot=)``); a
+    build that takes none ignores it.  The optional fields:
+
+    * ``lhs`` — the left-hand side printed before the value: a callable returning a SymPy object,
+      the string ``"= 0"`` for "value = 0", or None (the value alone);
+    * ``default`` — printed when no quantity is named (if none of a system's is, all are);
+    * ``options`` — the options besides ``values`` that ``build`` reads (``"sequence"``,
+      ``"shape"``, ``"moments"``; a pivot goes with a shape); others given are refused;
+    * ``substitute(options)`` — {symbol: value} the options put into every value of the system
+      (a shape's derived moments of inertia), or None.
+    """
 
     name: str
     meaning: str
     equation: str
     build: Callable[[Any], Any]
+    lhs: Any = None
+    default: bool = False
+    options: frozenset = frozenset()
+    substitute: Callable[[Any], Mapping] | None = None
+
+
+class Derivations(tuple):
+    """A system's derivations (a tuple of :class:`Derivation`) with the title ``derive`` prints above
+    them, ``summary`` (the system's own :attr:`System.summary` where empty)."""
+
+    summary: str
+
+    def __new__(cls, items: Any = (), summary: str = "") -> "Derivations":
+        self = super().__new__(cls, items)
+        self.summary = summary
+        return self
 
 
 class System:
@@ -172,7 +201,7 @@ class System:
     # --- derive, check, plot ----------------------------------------------------------------------
 
     def derivations(self) -> tuple[Derivation, ...]:
-        """What ``mechderive derive`` can print for this system."""
+        """What ``mechderive derive`` can print for this system (a tuple, or :class:`Derivations`)."""
         return ()
 
     def check_system(self) -> Any:
