@@ -51,6 +51,7 @@ The simple pendulum, hanging down:
 
 from __future__ import annotations
 
+import functools
 import math
 import numbers
 from dataclasses import dataclass, field
@@ -264,6 +265,9 @@ def _parameter_values(parameters: Mapping[Any, Any] | None, protected: Sequence[
         if sym in protected:
             raise InvalidInputError(f"expected parameters, got the coordinate or state {sym.name!r}; give it in `at`")
         out[sym] = _exact_number(value, f"parameter {sym.name}")
+        if out[sym].free_symbols & set(protected):
+            raise InvalidInputError(f"expected the value of parameter {sym.name} free of the coordinates and "
+                                    f"velocities, got {out[sym]}")
     return out
 
 
@@ -284,29 +288,73 @@ def _tidy(e: Any) -> sp.Expr:
     return out if sp.count_ops(out) <= sp.count_ops(e) else e
 
 
+def _ray_taylor(expr: sp.Expr, eps: sp.Symbol, order: int) -> list[sp.Expr]:
+    """[c0, …, c_order]: Taylor coefficients of expr(ε) at ε = 0, by differentiation (cheap on a ray)."""
+    out, d = [], expr
+    for k in range(order + 1):
+        out.append(sp.expand(d.xreplace({eps: 0}) / math.factorial(k)))
+        if k < order:
+            d = d.diff(eps)
+    return out
+
+
+#: Highest order to which the denominator of a removable 0/0 is allowed to vanish along a ray.
+_MAX_VALUATION = 8
+
+
 def _series_coefficients(expr: sp.Expr, shifts: dict, order: int, where: str) -> list[sp.Expr]:
-    """[c0, c1, …, c_order] of expr(x0 + ε δ) in ε, each polynomial in the δ; raises where expr is singular."""
-    eps = sp.Dummy("epsilon", positive=True)
-    moved = expr.xreplace({s: v + eps * d for s, (v, d) in shifts.items()})
-    try:
-        series = sp.series(moved, eps, 0, order + 1).removeO()
-    except (NotImplementedError, ValueError, TypeError, sp.PolynomialError) as exc:
-        raise DerivationError(f"expected the equations expandable in a series at {where}, got {exc}") from None
-    coeffs = [sp.Integer(0)] * (order + 1)
+    """[c0, c1, …, c_order] of expr(x0 + ε δ) in ε, each polynomial in the δ; raises where expr is singular.
+
+    ``shifts`` maps each symbol to (x0, δ).  The terms whose denominator vanishes at x0 (a removable
+    0/0, e.g. the Routhian's p²(1 − cos θ)/sin²θ at θ = 0) are expanded as N(ε)/D(ε): D's first
+    nonzero Taylor coefficient, at order k, must be matched by N vanishing to order k; the quotient's
+    coefficients are polynomials in δ when the expression is smooth at x0 (else the limit depends
+    on the direction, and the coordinates are singular there).
+    """
+    eps = sp.Dummy("epsilon")
+    point = {s: v for s, (v, _) in shifts.items()}
+    ray = {s: v + eps * d for s, (v, d) in shifts.items()}
+    regular, singular = [], []
+    for term in sp.Add.make_args(sp.expand(expr)):
+        den = sp.fraction(sp.together(term))[1]
+        (singular if _is_zero(den.xreplace(point)) else regular).append(term)
+    coeffs = _ray_taylor(sp.Add(*regular).xreplace(ray), eps, order)
+    singular_text = f"the terms {sp.sstr(sp.Add(*singular))}"
+    if singular:
+        num, den = sp.fraction(sp.together(sp.Add(*singular)))
+        num, den = num.xreplace(ray), den.xreplace(ray)
+        b, k = [], None
+        d_k = den
+        for j in range(_MAX_VALUATION + order + 1):
+            c = sp.expand(d_k.xreplace({eps: 0}) / math.factorial(j))
+            b.append(c)
+            if k is None and not _is_zero(c):
+                k = j
+            if k is not None and j >= k + order:
+                break
+            d_k = d_k.diff(eps)
+            if k is None and j == _MAX_VALUATION:
+                raise InvalidInputError(f"expected the equations finite at {where}, got {singular_text} "
+                                        "with a denominator vanishing there to every order")
+        a = _ray_taylor(num, eps, k + order)
+        low = [x for x in a[:k] if not _is_zero(x)]
+        if low:
+            raise InvalidInputError(
+                f"expected the equations smooth at {where}, got {singular_text}, infinite there "
+                "(the coordinates are singular at this point: use others, or a point where the motion is regular)")
+        a, b = a[k:], [sp.Integer(0) if _is_zero(x) else x for x in b[k:]]
+        quotient: list[sp.Expr] = []
+        for j in range(order + 1):
+            rest = a[j] - sum(quotient[i] * b[j - i] for i in range(j))
+            quotient.append(sp.cancel(rest / b[0]))
+        coeffs = [sp.expand(x + y) for x, y in zip(coeffs, quotient)]
     deltas = [d for _, d in shifts.values()]
-    for term in sp.Add.make_args(sp.expand(series)):
-        c, k = term.as_coeff_exponent(eps)
-        if c.has(eps) or not (k.is_Integer and 0 <= k <= order):
-            raise InvalidInputError(
-                f"expected the equations smooth at {where}, got a singular term {term.subs(eps, 1)} "
-                "(the coordinates are singular there: use others, or give a point where the motion is regular)")
-        coeffs[int(k)] += c
     for c in coeffs:
-        if deltas and not c.is_polynomial(*deltas):
+        if not _finite(c) or (deltas and not sp.cancel(c).is_polynomial(*deltas)):
             raise InvalidInputError(
-                f"expected the equations smooth at {where}, got a non-analytic term {c} in the perturbation "
-                "(the coordinates are singular there)")
-    return [sp.expand(c) for c in coeffs]
+                f"expected the equations smooth at {where}, got {singular_text if singular else 'a term'} whose "
+                "limit there depends on the direction of approach (the coordinates are singular at this point)")
+    return [sp.expand(sp.cancel(c)) for c in coeffs]
 
 
 def _check_at_rest(residuals: Sequence[tuple[str, sp.Expr]], rtol: float, what: str) -> None:
@@ -672,13 +720,12 @@ def linearize_lagrangian(L: Any, coordinates: Sequence[sp.Symbol], velocities: S
         raise InvalidInputError(f"expected the point `at` as a mapping {{symbol or name: value}}, got {at!r}")
     at = {k: _exact_number(v, f"the value of {getattr(k, 'name', k)} in `at`") for k, v in at.items()}
     pvals = _parameter_values(parameters, qs + vs, L.free_symbols.union(*(v.free_symbols for v in at.values())))
-    L = L.xreplace(pvals)
     if any(s.name == "t" for s in L.free_symbols) or L.has(t):
         raise InvalidInputError("expected an autonomous Lagrangian (no explicit t): a time-dependent system has no "
                                 "equilibria in this sense")
     funcs = [coordinate(q.name) for q in qs]
     to_t = {**{q: f for q, f in zip(qs, funcs)}, **{v: f.diff(t) for v, f in zip(vs, funcs)}}
-    model = LagrangianModel(L.xreplace(to_t), funcs)
+    model = _reduction(L.xreplace(to_t), tuple(funcs))
     inner_q, inner_v = model.positions, model.velocities
     cyclic = model.cyclic_coordinates
     cyc_idx = [funcs.index(c) for c in cyclic]
@@ -730,7 +777,7 @@ def linearize_lagrangian(L: Any, coordinates: Sequence[sp.Symbol], velocities: S
             cyc_rates[inner_v[j]] = given.get(vs[j], sp.Integer(0))
     for j, c, p in zip(cyc_idx, cyclic, psyms):
         if p not in momenta:
-            momenta[p] = _tidy(model.momenta[j].xreplace({**inner, **cyc_rates}))
+            momenta[p] = _tidy(model.momenta[j].xreplace(pvals).xreplace({**inner, **cyc_rates}))
         if qs[j] in given:
             pass  # the position of a cyclic coordinate does not enter: any value is the same steady motion
     for j in cyc_idx:
@@ -739,7 +786,9 @@ def linearize_lagrangian(L: Any, coordinates: Sequence[sp.Symbol], velocities: S
     for i in rem_idx:
         point[vs[i]] = sp.Integer(0)
 
-    R = model.routhian.xreplace(momenta) if cyclic else model.state_lagrangian
+    # the model is of the Lagrangian as given (parameters symbolic: its Routhian is derived once per
+    # system, and the cyclic coordinates do not depend on the values); the numbers go in here
+    R = (model.routhian if cyclic else model.state_lagrangian).xreplace(pvals).xreplace(momenta)
     rq = [inner_q[i] for i in rem_idx]
     rv = [inner_v[i] for i in rem_idx]
     names = [qs[i].name for i in rem_idx]
@@ -756,6 +805,12 @@ def linearize_lagrangian(L: Any, coordinates: Sequence[sp.Symbol], velocities: S
     momenta_out = {p: momenta[p] for p in psyms}
     return _finish("lagrangian", tuple(qs[i] for i in rem_idx), point, tuple(qs[j] for j in cyc_idx), momenta_out,
                    Mm, G, K, None, pencil)
+
+
+@functools.lru_cache(maxsize=32)
+def _reduction(L: sp.Expr, coordinates: tuple) -> LagrangianModel:
+    """The Lagrangian model of L, shared by the calls on one system (its Routhian is derived once)."""
+    return LagrangianModel(L, coordinates)
 
 
 def _quadratic_lagrangian(R: sp.Expr, rq: list, rv: list, values: list, where: str):
