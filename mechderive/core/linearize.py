@@ -131,8 +131,11 @@ class Linearization:
         """The linearized equations, each = 0: M δq̈ + G δq̇ + K δq, or δẋ − J δx."""
         dq, dv, da = (sp.Matrix(x) if x else None for x in self.perturbation_symbols())
         if self.kind == "lagrangian":
-            return (self.M * da + self.G * dv + self.K * dq).applyfunc(sp.expand)
-        return (dv - self.jacobian * dq).applyfunc(sp.expand)
+            blocks = ((self.M, da), (self.G, dv), (self.K, dq))
+        else:
+            blocks = ((sp.eye(len(self.variables)), dv), (-self.jacobian, dq))
+        n = len(self.variables)
+        return sp.Matrix([sp.Add(*[_tidy(A[i, j]) * x[j] for A, x in blocks for j in range(n)]) for i in range(n)])
 
     def state_matrix(self) -> sp.Matrix:
         """A of δẋ = A δx: J itself, or [[0, 1], [−M⁻¹K, −M⁻¹G]] for a Lagrangian system (x = (δq, δq̇))."""
@@ -144,40 +147,55 @@ class Linearization:
 
     # --- rendering ------------------------------------------------------------------------
     def _point_text(self) -> str:
-        return ", ".join(f"{k} = {v}" for k, v in self.point.items())
+        return ", ".join(f"{k} = {_show(v)}" for k, v in self.point.items())
 
     def text(self) -> str:
-        """A plain-text report: the point, the matrices, the polynomial, the spectrum and the verdict."""
+        """A plain-text report: the point, the matrices, the polynomial, the spectrum and the verdict.
+
+        Exact numbers too long to read (decimals made exact, cos(7/10), …) are shown to 12 digits.
+        """
         lines = [f"linearization about {self._point_text()}"]
         if self.cyclic:
             lines.append("  cyclic coordinates eliminated (Routh): " + ", ".join(map(str, self.cyclic))
-                         + "; conserved momenta " + ", ".join(f"{k} = {v}" for k, v in self.momenta.items()))
+                         + "; conserved momenta " + ", ".join(f"{k} = {_show(v)}" for k, v in self.momenta.items()))
         names = ", ".join(map(str, self.variables))
         if self.kind == "lagrangian":
             lines.append(f"  M δq̈ + G δq̇ + K δq = 0, q = ({names})")
             for label, m in (("M", self.M), ("G", self.G), ("K", self.K)):
-                lines.append(f"  {label} = {sp.sstr(m.tolist())}")
+                lines.append(f"  {label} = {_show_matrix(m)}")
         else:
             lines.append(f"  δẋ = J δx, x = ({names})")
-            lines.append(f"  J = {sp.sstr(self.jacobian.tolist())}")
-        lines.append(f"  characteristic polynomial: {sp.sstr(self.characteristic_polynomial.as_expr())} = 0")
+            lines.append(f"  J = {_show_matrix(self.jacobian)}")
+        lines.append(f"  characteristic polynomial: {_show(self.polynomial_expression())} = 0")
         if self.squared_frequencies:
-            lines.append("  ω² = −λ² (per root pair): " + ", ".join(map(sp.sstr, self.squared_frequencies)))
+            lines.append("  ω² = −λ² (per root pair): " + ", ".join(map(_show, self.squared_frequencies)))
         lines.append("  eigenvalues" + (" (exact)" if self.exact else " (numeric)") + ": "
-                     + (", ".join(map(sp.sstr, self.eigenvalues)) or "not available"))
-        if self.numeric_eigenvalues is not None and self.exact:
+                     + (", ".join(map(_show, self.eigenvalues)) or "not available"))
+        if self.numeric_eigenvalues is not None and self.exact and any(
+                _show(e) != _complex_text(z) for e, z in zip(self.eigenvalues, self.numeric_eigenvalues)):
             lines.append("  numerically: " + ", ".join(_complex_text(z) for z in self.numeric_eigenvalues))
         lines.append("  frequencies (rad/s): " + (", ".join(_value_text(f) for f in self.frequencies) or "none"))
         lines.append("  growth rates (1/s): " + (", ".join(_value_text(r) for r in self.growth_rates) or "none"))
         lines.append(f"  {self.verdict}")
         return "\n".join(lines)
 
+    def polynomial_expression(self) -> sp.Expr:
+        """The characteristic polynomial as an expression with each coefficient factored (for printing)."""
+        coeffs = self.characteristic_polynomial.all_coeffs()
+        n = len(coeffs) - 1
+        return sp.Add(*[_tidy(c) * LAMBDA ** (n - i) for i, c in enumerate(coeffs)])
+
     def latex(self) -> str:
         """A LaTeX rendering: the linearized equations, the characteristic polynomial and the spectrum."""
+        rename = {}
+        for v, *deltas in zip(self.variables, *[x for x in self.perturbation_symbols() if x]):
+            base = sp.latex(v)
+            for d, accent in zip(deltas, ("{%s}", r"\dot{%s}", r"\ddot{%s}")):
+                rename[d] = sp.Symbol(r"\delta " + accent % base)
         parts = [r"\begin{aligned}"]
         for e in self.equations:
-            parts.append(sp.latex(e) + r" &= 0 \\")
-        parts.append(sp.latex(self.characteristic_polynomial.as_expr()) + r" &= 0 \\")
+            parts.append(sp.latex(e.xreplace(rename)) + r" &= 0 \\")
+        parts.append(sp.latex(self.polynomial_expression()) + r" &= 0 \\")
         if self.eigenvalues:
             parts.append(r"\lambda &\in \left\{" + ", ".join(sp.latex(e) for e in self.eigenvalues) + r"\right\} \\")
         if self.frequencies:
@@ -191,13 +209,39 @@ class Linearization:
         return self.text()
 
 
+#: An exact number printed longer than this is shown to 12 digits instead.
+_READABLE = 40
+
+
+def _show(x: Any) -> str:
+    """``x`` as text; a number without symbols whose exact form is long, to 12 significant digits."""
+    x = sp.sympify(x)
+    text = sp.sstr(x)
+    if x.is_Rational and x.q > 1000:  # a decimal made exact
+        return f"{float(x):.15g}"
+    if len(text) <= _READABLE:
+        return text
+    if not x.free_symbols:
+        return _complex_text(complex(x.evalf(17)))
+    if isinstance(x, sp.Poly) or not isinstance(x, sp.Expr):
+        return text
+    floats = x.xreplace({n: sp.Float(n, 12) for n in x.atoms(sp.Rational) if not n.is_Integer})
+    floats = floats.xreplace({f: sp.Float(f.evalf(12), 12) for f in floats.atoms(sp.Function)
+                              if not f.free_symbols})
+    return sp.sstr(sp.N(floats, 12))
+
+
+def _show_matrix(m: sp.Matrix) -> str:
+    return "[" + ", ".join("[" + ", ".join(_show(e) for e in row) + "]" for row in m.tolist()) + "]"
+
+
 def _value_text(x: Any) -> str:
     x = sp.sympify(x)
     if x.free_symbols:
         return sp.sstr(x)
-    v = complex(x.evalf(17))
-    shown = f"{v.real:.12g}"
-    return shown if isinstance(x, sp.Float) else f"{sp.sstr(x)} ≈ {shown}" if sp.sstr(x) != shown else shown
+    shown = _complex_text(complex(x.evalf(17)))
+    exact = sp.sstr(x)
+    return shown if isinstance(x, sp.Float) or exact == shown or len(exact) > _READABLE else f"{exact} ≈ {shown}"
 
 
 def _complex_text(z: complex) -> str:
@@ -674,9 +718,10 @@ def _verdict(spec: _Spectrum, drift: list) -> tuple[bool | None, str]:
     if zeros and not spec.frequencies and not spec.decay:
         return True, "neutral: every eigenvalue is zero (semisimple): perturbations neither grow nor oscillate" + \
             " in the linear approximation"
-    return True, ("stable in the linear approximation, marginally: every eigenvalue is on the imaginary axis "
-                  "(or in the left half-plane), semisimple; the linearization does not decide nonlinear "
-                  "(Lyapunov) stability" + note)
+    where = "on the imaginary axis or in the left half-plane" if spec.decay else "on the imaginary axis"
+    return True, (f"stable in the linear approximation, marginally: every eigenvalue is {where}, those on the axis "
+                  "semisimple (no secular drift); the linearization alone does not decide nonlinear (Lyapunov) "
+                  "stability" + note)
 
 
 # ------------------------------------------------------------------------------- entry points
@@ -794,10 +839,14 @@ def linearize_lagrangian(L: Any, coordinates: Sequence[sp.Symbol], velocities: S
     names = [qs[i].name for i in rem_idx]
     where = ", ".join(f"{k} = {v}" for k, v in point.items())
     Q, Mm, C, H = _quadratic_lagrangian(R, rq, rv, [point[qs[i]] for i in rem_idx], where)
-    _check_at_rest([(f"∂R/∂{n} (the {n} equation of motion at rest)" if cyclic else f"∂L/∂{n} (the {n} equation "
-                     "of motion at rest)", q) for n, q in zip(names, Q)], rtol,
-                   "a relative equilibrium (the reduced generalised forces vanish)" if cyclic else
-                   "an equilibrium (the generalised forces vanish)")
+    try:
+        _check_at_rest([(f"∂R/∂{n} (the {n} equation of motion at rest)" if cyclic else f"∂L/∂{n} (the {n} "
+                         "equation of motion at rest)", q) for n, q in zip(names, Q)], rtol,
+                       "a relative equilibrium (the reduced generalised forces vanish)" if cyclic else
+                       "an equilibrium (the generalised forces vanish)")
+    except InvalidInputError as exc:
+        hint = _steady_rate_hint(model, pvals, inner, rq, cyc_idx, psyms, given, vs) if len(rq) == 1 else ""
+        raise InvalidInputError(f"{exc}{hint}") from None
     Mm = Mm.applyfunc(_tidy)
     G = (C - C.T).applyfunc(_tidy)
     K = (-H).applyfunc(_tidy)
@@ -805,6 +854,31 @@ def linearize_lagrangian(L: Any, coordinates: Sequence[sp.Symbol], velocities: S
     momenta_out = {p: momenta[p] for p in psyms}
     return _finish("lagrangian", tuple(qs[i] for i in rem_idx), point, tuple(qs[j] for j in cyc_idx), momenta_out,
                    Mm, G, K, None, pencil)
+
+
+def _steady_rate_hint(model, pvals: dict, inner: dict, rq: list, cyc_idx: list, psyms: list, given: dict,
+                      vs: tuple) -> str:
+    """'; steady motions here have phi_dot = …' when one cyclic rate was given as a number and missed."""
+    rated = [j for j, p in zip(cyc_idx, psyms) if vs[j] in given and p not in given]
+    if len(rated) != 1 or len(cyc_idx) != 1:
+        return ""
+    j, (p,) = rated[0], psyms
+    r = sp.Dummy("rate")
+    momentum = model.momenta[j].xreplace(pvals).xreplace({**inner, model.velocities[j]: r})
+    R = model.routhian.xreplace(pvals).xreplace({p: momentum})
+    try:
+        Q = sp.together(R.diff(rq[0]).xreplace(inner))
+        if Q.free_symbols != {r} or not _finite(Q):
+            return ""
+        num = sp.Poly(sp.numer(Q), r)
+        roots = [complex(x) for x in num.nroots(n=15)]
+    except (sp.PolynomialError, sp.polys.polyerrors.PolificationFailed, ValueError, TypeError,
+            NotImplementedError, sp.polys.polyerrors.NoConvergence):
+        return ""
+    real = sorted(z.real for z in roots if abs(z.imag) <= 1e-12 * max(1.0, abs(z)))
+    if not real:
+        return f"; no steady motion at this point has a real {vs[j].name}"
+    return f"; steady motions at this point have {vs[j].name} = " + " or ".join(f"{x:.15g}" for x in real)
 
 
 @functools.lru_cache(maxsize=32)
