@@ -1052,18 +1052,20 @@ def linearization_derivation(system: Any, at_text: str, parameters: Mapping[str,
         psyms = [sp.Symbol("p_" + q.name, real=True) for q in qs]
         parsed = parse_point(at_text, [*qs, *vs, *psyms], tuple(params), label)
         at = {k.name: v for k, v in parsed.items()}
-        values = _named_parameters(parameters, params, parsed)
+        values = _named_parameters(parameters, params, parsed, as_symbolic(L).free_symbols)
         result = linearize_lagrangian(L, qs, vs, at, values)
     else:
         rhs, xs, params = first
         parsed = parse_point(at_text, tuple(xs), tuple(params), label)
-        values = _named_parameters(parameters, params, parsed)
+        values = _named_parameters(parameters, params, parsed, as_symbolic(sp.Matrix(list(rhs))).free_symbols)
         result = linearize_first_order(rhs, xs, {k.name: v for k, v in parsed.items()}, values)
     return result.equations, result.text(), result
 
 
-def _named_parameters(parameters: Mapping[str, Any] | None, params: Sequence[sp.Symbol], parsed: dict) -> dict | None:
-    """The given parameter numbers as {symbol: value}; the `at` values' own parameter symbols are substituted too."""
+def _named_parameters(parameters: Mapping[str, Any] | None, params: Sequence[sp.Symbol], parsed: dict,
+                      used: set) -> dict | None:
+    """The given parameter numbers as {symbol: value}, for the parameters the equations or `at` use (a scene's
+    other parameters, e.g. of output expressions only, are left out)."""
     if not parameters:
         return None
     by_name = {p.name: p for p in params}
@@ -1072,5 +1074,6 @@ def _named_parameters(parameters: Mapping[str, Any] | None, params: Sequence[sp.
         sym = by_name.get(key) if isinstance(key, str) else key if key in params else None
         if sym is None:
             raise InvalidInputError(f"expected parameters among {', '.join(by_name) or 'none'}, got {key!r}")
-        out[sym] = _exact_number(value, f"parameter {sym.name}")
+        if sym in used or any(sym in v.free_symbols for v in parsed.values()):
+            out[sym] = _exact_number(value, f"parameter {sym.name}")
     return out
