@@ -123,7 +123,7 @@ def test_sleeping_top_criterion_is_the_chapters_3_83():
     ratio = sp.simplify(w2 / (u2 - 1))
     assert ratio.is_positive and not ratio.has(w3)
     assert lin.stable is None
-    threshold = hm.model().sleeping_threshold_spin  # the heavy-top module's own (3.83) threshold
+    threshold = 2 * sp.sqrt(I1 * M * g_ * l_) / I3  # the chapter: I3 ω3 = 2 √(I1 M g l)
     for factor, stable in ((sp.Rational(999, 1000), False), (sp.Rational(1001, 1000), True)):
         values = {I1: 3, I3: 2, M: 1, g_: sp.Rational(981, 100), l_: sp.Rational(1, 2)}
         spin = (threshold * factor).subs(values)
