@@ -291,3 +291,15 @@ def test_linearization_derivation_parses_at_with_the_whitelist():
             linearization_derivation(_Spherical(), bad, {"m": 1.0, "g": 9.81, "l": 2.0})
     with pytest.raises(InvalidInputError, match="offers no Lagrangian or first-order model"):
         linearization_derivation(System(), "x=0")
+
+
+def test_repeated_eigenvalues_semisimple_or_drifting():
+    x, y, xd, yd = sp.symbols("x y x_dot y_dot", real=True)
+    k = sp.Symbol("k", positive=True)
+    # isotropic oscillator: λ = ±i√k twice, two eigenvectors each — stable, no secular term
+    iso = linearize_lagrangian((xd**2 + yd**2) / 2 - k * (x**2 + y**2) / 2, [x, y], [xd, yd], {x: 0, y: 0})
+    assert iso.stable is True and iso.frequencies == (sp.sqrt(k), sp.sqrt(k))
+    # a spring between two free masses: the centre of mass moves uniformly, δx = δy = a + b t (λ = 0 defective)
+    pair = linearize_lagrangian((xd**2 + yd**2) / 2 - k * (x - y) ** 2 / 2, [x, y], [xd, yd], {x: 0, y: 0})
+    assert pair.stable is False and not pair.growth_rates and pair.verdict.startswith("neutral")
+    assert pair.frequencies == (sp.sqrt(2) * sp.sqrt(k),)

@@ -63,7 +63,7 @@ import sympy as sp
 from ..errors import DerivationError, InvalidInputError
 from .lagrangian import LagrangianModel, vanishes
 from .simplify import trig_normal
-from .symbols import as_symbolic, coordinate, state_symbol, t
+from .symbols import as_symbolic, coordinate, t
 
 __all__ = ["Linearization", "linearize_lagrangian", "linearize_first_order", "linearization_derivation",
            "parse_point", "LAMBDA"]
@@ -329,7 +329,11 @@ def _tidy(e: Any) -> sp.Expr:
         out = sp.factor(trig_normal(e))
     except (sp.PolynomialError, sp.polys.polyerrors.PolificationFailed, TypeError, ValueError):
         out = sp.cancel(e)
-    return out if sp.count_ops(out) <= sp.count_ops(e) else e
+    out = out if sp.count_ops(out) <= sp.count_ops(e) else e
+    if out.has(sp.sqrt(sp.Wild("w")).func) and not out.free_symbols:  # √(3 + 2√2) = 1 + √2
+        nested = sp.sqrtdenest(out)
+        out = nested if sp.count_ops(nested) < sp.count_ops(out) else out
+    return out
 
 
 def _ray_taylor(expr: sp.Expr, eps: sp.Symbol, order: int) -> list[sp.Expr]:
@@ -424,6 +428,9 @@ def _check_at_rest(residuals: Sequence[tuple[str, sp.Expr]], rtol: float, what: 
 
 # ----------------------------------------------------------------------------------- spectrum
 def _is_zero(c: sp.Expr) -> bool:
+    """Whether ``c`` is zero: exactly with symbols; a number below 1e-40 in magnitude (at 50 digits) counts as 0,
+    so an exact zero written as e.g. sin²(7/10) + cos²(7/10) − 1 is recognised (use units in which the
+    system's numbers are not that small)."""
     c = sp.sympify(c)
     if c == 0:
         return True
@@ -527,7 +534,6 @@ def _analyse(poly: sp.Poly) -> _Spectrum:
         reduced = sp.Poly(sum(rest[i] * mu ** ((m - i) // 2) for i in range(0, m + 1, 2)), mu)
     else:
         reduced = sp.Poly(sum(rest[i] * lam ** (m - i) for i in range(m + 1)), lam)
-    var = mu if even else lam
     exact_roots: dict = {}
     if reduced.degree() > 0:
         try:
@@ -552,7 +558,8 @@ def _analyse(poly: sp.Poly) -> _Spectrum:
         return spec
     for r, mult in items:
         if even:
-            spec.squared.append(_tidy(-r) if exact else -r)
+            spec.squared.append(_tidy(-r) if exact else sp.Float(-r.real, 17) if abs(r.imag) <= _ZERO * abs(r)
+                                else sp.Float(-r.real, 17) - sp.I * sp.Float(r.imag, 17))
             _classify_pair(spec, r, mult, exact)
         else:
             _classify_root(spec, r, mult, exact)
