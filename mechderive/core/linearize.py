@@ -225,10 +225,7 @@ def _show(x: Any) -> str:
         return _complex_text(complex(x.evalf(17)))
     if isinstance(x, sp.Poly) or not isinstance(x, sp.Expr):
         return text
-    floats = x.xreplace({n: sp.Float(n, 12) for n in x.atoms(sp.Rational) if not n.is_Integer})
-    floats = floats.xreplace({f: sp.Float(f.evalf(12), 12) for f in floats.atoms(sp.Function)
-                              if not f.free_symbols})
-    return sp.sstr(sp.N(floats, 12))
+    return sp.sstr(sp.N(x, 12))
 
 
 def _show_matrix(m: sp.Matrix) -> str:
