@@ -208,6 +208,23 @@ class System:
         """The :class:`mechderive.formulas.systems.System` that ``mechderive check`` uses, or None."""
         return None
 
+    def lagrangian_model(self) -> tuple | None:
+        """(L, coordinates, velocities, parameter symbols) for :mod:`mechderive.core.linearize`, or None.
+
+        L is a SymPy expression in the plain symbols ``coordinates`` (q) and ``velocities`` (q̇, same
+        order) and the parameter symbols; a system given by a Lagrangian returns it, so that
+        ``derive … linearization --at …`` can linearize it about an equilibrium or a steady motion.
+        """
+        return None
+
+    def first_order_model(self) -> tuple | None:
+        """(rhs, state, parameter symbols) of ẋ = rhs(x) for :mod:`mechderive.core.linearize`, or None.
+
+        Used when :meth:`lagrangian_model` is None (Euler's equations (3.33) of the free top: the
+        state ω, the linearization about a steady rotation).
+        """
+        return None
+
     def plot(self, result: Any, figure: Any) -> bool:
         """Draw ``result`` (a :class:`~mechderive.scenes.planner.RunResult`) on ``figure``; False where the
         system has no picture of its own (the generic plot of the columns against t is used)."""
