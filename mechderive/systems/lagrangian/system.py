@@ -359,7 +359,7 @@ class LagrangianSystem(System):
         import sympy as sp
 
         from ...core.symbols import state_symbol
-        from ...formulas import systems as fs
+        from ...core import check_system as fs
 
         d, eq = self.definition, self.equations
         qs = [fs.Quantity(q, state_symbol(q), "state", f"coordinate {q}") for q in d.coordinates]
@@ -445,11 +445,13 @@ class LagrangianFamily(System):
         return self.configure(EXAMPLE_DEFINITION)
 
     def derivations(self) -> tuple[Derivation, ...]:
-        """Those of the example scene (the spherical pendulum); a scene's own come from its configured system."""
-        return self._example().derivations()
+        """None: the family has no equations until a scene (or :func:`from_lagrangian`) gives its Lagrangian;
+        ``mechderive derive SCENE.toml`` derives a configured one's."""
+        return ()
 
     def check_system(self) -> Any:
-        return self._example().check_system()
+        """None, as :meth:`derivations`: ``mechderive check SCENE.toml`` checks a configured one's."""
+        return None
 
     def example_scene(self) -> str:
         return EXAMPLE_SCENE
