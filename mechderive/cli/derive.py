@@ -66,7 +66,37 @@ def add_parser(sub: "argparse._SubParsersAction") -> None:
     p.add_argument("--parameters", action="store_true",
                    help="with a scene file: substitute its [parameters] numbers for the symbols of those names "
                         "(--set takes precedence)")
+    p.add_argument("--at", default=None, metavar="POINT",
+                   help="with QUANTITY linearization: the equilibrium or steady motion, e.g. "
+                        "\"theta=0.7, phi_dot=2.5\" (coordinates, velocities of cyclic ones or their momenta p_<q>)")
     p.set_defaults(run=run)
+
+
+def _linearization(args: argparse.Namespace, target, scene_parameters: dict) -> int:
+    """``derive SYSTEM linearization --at POINT``: small oscillations about an equilibrium or a steady motion."""
+    import json
+
+    from ..core.linearize import linearization_derivation
+    from ..errors import InvalidInputError
+    from ..systems import registry
+
+    if args.at is None:
+        raise InvalidInputError("derive linearization: expected --at 'name=value, ...' (the equilibrium or steady "
+                                "motion), got none")
+    if args.format not in ("text", "latex", "json"):
+        raise InvalidInputError(f"derive linearization: expected --format text, latex or json, got {args.format!r}")
+    system = registry.get(target) if isinstance(target, str) else target
+    _, summary, lin = linearization_derivation(system, args.at, scene_parameters or None)
+    if args.format == "text":
+        sys.stdout.write(summary.rstrip("\n") + "\n")
+    elif args.format == "latex":
+        sys.stdout.write(lin.latex().rstrip("\n") + "\n")
+    else:
+        sys.stdout.write(json.dumps({"system": system.name, "at": args.at, "text": summary, "latex": lin.latex(),
+                                     "stable": lin.stable, "verdict": lin.verdict,
+                                     "frequencies": [str(f) for f in lin.frequencies],
+                                     "growth_rates": [str(g) for g in lin.growth_rates]}, indent=2) + "\n")
+    return 0
 
 
 def _shape_and_quantities(args: argparse.Namespace, spec) -> tuple[str | None, list[str]]:
@@ -93,6 +123,10 @@ def run(args: argparse.Namespace) -> int:
     scene = is_scene_path(args.system)
     # a scene file is read once: its system object and parameters go on
     target, scene_parameters = find_system(args.system) if scene else (args.system, {})
+    if list(args.quantities) == ["linearization"]:
+        return _linearization(args, target, scene_parameters)
+    if args.at is not None:
+        raise InvalidInputError("--at: expected with QUANTITY linearization only")
     spec = system(target)
     if args.format not in FORMATS:
         raise InvalidInputError(f"expected a format among {', '.join(FORMATS)}, got {args.format!r}")

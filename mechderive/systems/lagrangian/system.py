@@ -330,6 +330,11 @@ class LagrangianSystem(System):
 
     # --- derive, check ---------------------------------------------------------------------------
 
+    def lagrangian_model(self) -> tuple:
+        """(L, coordinates, velocities, parameter symbols): what :mod:`mechderive.core.linearize` reduces."""
+        d = self.definition
+        return d.lagrangian, d.positions, d.velocities, d.parameter_symbols
+
     def derivations(self) -> tuple[Derivation, ...]:
         """L, the Euler–Lagrange equations, M, b, q̈, the momenta, the energy and the conserved momenta."""
         eq = self.equations
