@@ -72,6 +72,14 @@ def add_parser(sub: "argparse._SubParsersAction") -> None:
     p.set_defaults(run=run)
 
 
+def _number(value) -> float | str:
+    """A float where ``value`` is a number (evaluated at 30 digits, then rounded once), else its text."""
+    import sympy as sp
+
+    x = sp.N(value, 30)
+    return float(x) if x.is_real and x.is_number else str(value)
+
+
 def _linearization(args: argparse.Namespace, target, scene_parameters: dict) -> int:
     """``derive SYSTEM linearization --at POINT``: small oscillations about an equilibrium or a steady motion."""
     import json
@@ -94,8 +102,10 @@ def _linearization(args: argparse.Namespace, target, scene_parameters: dict) -> 
     else:
         sys.stdout.write(json.dumps({"system": system.name, "at": args.at, "text": summary, "latex": lin.latex(),
                                      "stable": lin.stable, "verdict": lin.verdict,
-                                     "frequencies": [str(f) for f in lin.frequencies],
-                                     "growth_rates": [str(g) for g in lin.growth_rates]}, indent=2) + "\n")
+                                     "frequencies": [_number(f) for f in lin.frequencies],
+                                     "growth_rates": [_number(g) for g in lin.growth_rates],
+                                     "frequencies_exact": [str(f) for f in lin.frequencies],
+                                     "growth_rates_exact": [str(g) for g in lin.growth_rates]}, indent=2) + "\n")
     return 0
 
 
