@@ -275,3 +275,37 @@ class System:
     def describe(self) -> list[tuple[str, str, str]]:
         """(name, kind, meaning) of every symbol, in the listing order."""
         return [(q.name, q.kind, q.meaning) for q in self.quantities]
+
+
+def from_lagrangian_model(name: str, summary: str, lagrangian: sp.Expr, positions: Iterable[sp.Symbol],
+                          velocities: Iterable[sp.Symbol], parameters: Iterable[sp.Symbol]) -> System:
+    """The ``check`` symbols of a system given by its Lagrangian in the state symbols (q, q_dot, parameters).
+
+    The state is q, q_dot; q_ddot is fixed on a motion by the Euler–Lagrange equations (M q̈ = F,
+    derived here); ``Lagrangian``, ``energy`` (h = Σ q̇ ∂L/∂q̇ − L) and each ``p_<q>`` = ∂L/∂q̇ are
+    defined quantities.  What :meth:`mechderive.systems.base.System.check_system` gives by default for a
+    system that offers :meth:`~mechderive.systems.base.System.lagrangian_model`.
+    """
+    from .lagrangian import _mass_and_forcing, _solve_accelerations
+
+    L = as_symbolic(lagrangian)
+    qs, vs, ps = tuple(positions), tuple(velocities), tuple(parameters)
+    names = tuple(q.name for q in qs)
+
+    @functools.cache
+    def accelerations() -> dict:
+        M, F = _mass_and_forcing(L, qs, vs)
+        return dict(zip((state_symbol(n + "_ddot") for n in names), _solve_accelerations(M, F)))
+
+    quantities = [Quantity(n, state_symbol(n), "state", f"coordinate {n}") for n in names]
+    quantities += [Quantity(n + "_dot", state_symbol(n + "_dot"), "state", f"velocity of {n}") for n in names]
+    quantities += [Quantity(n + "_ddot", state_symbol(n + "_ddot"), "derivative",
+                            f"acceleration of {n} (fixed by the equations of motion on a motion)") for n in names]
+    quantities += [Quantity(p.name, p, "parameter", "a parameter of the Lagrangian") for p in ps]
+    quantities += [Quantity("Lagrangian", sp.Symbol("Lagrangian", real=True), "defined", "L", lambda s: L),
+                   Quantity("energy", sp.Symbol("energy", real=True), "defined", "h = Σ q̇ ∂L/∂q̇ − L",
+                            lambda s: sp.expand(sum(v * L.diff(v) for v in vs) - L))]
+    quantities += [Quantity(f"p_{n}", sp.Symbol(f"p_{n}", real=True), "defined", f"p_{n} = ∂L/∂{n}_dot",
+                            lambda s, v=v: L.diff(v)) for n, v in zip(names, vs)]
+    return System(name=name, summary=summary, coordinates=names, order=2, highest=accelerations,
+                  quantities=quantities, domain={}, motion="the Euler–Lagrange equations of L")

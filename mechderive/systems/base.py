@@ -205,8 +205,18 @@ class System:
         return ()
 
     def check_system(self) -> Any:
-        """The :class:`mechderive.formulas.systems.System` that ``mechderive check`` uses, or None."""
-        return None
+        """The :class:`mechderive.formulas.systems.System` that ``mechderive check`` uses, or None.
+
+        By default, that of :meth:`lagrangian_model` where the system offers one
+        (:func:`mechderive.core.check_system.from_lagrangian_model`): q, q_dot, q_ddot on a motion,
+        the parameters, ``Lagrangian``, ``energy`` and ``p_<q>``.
+        """
+        model = self.lagrangian_model()
+        if model is None:
+            return None
+        from ..core.check_system import from_lagrangian_model
+
+        return from_lagrangian_model(self.name, self.summary, *model)
 
     def lagrangian_model(self) -> tuple | None:
         """(L, coordinates, velocities, parameter symbols) for :mod:`mechderive.core.linearize`, or None.
