@@ -126,6 +126,8 @@ class System:
     methods: tuple[str, ...] = ("integrate",)
     #: peak bytes a solve needs per output sample (the schema's memory guard)
     bytes_per_sample: int = 600
+    #: the quantities :meth:`plot` draws from (``mechderive run --plot`` solves them too)
+    plot_quantities: tuple[str, ...] = ()
 
     # --- the scene schema -------------------------------------------------------------------------
 
@@ -187,6 +189,11 @@ class System:
     def example_scene(self) -> str:
         """A complete scene file (TOML) of this system: the default of ``mechderive run``'s built-ins."""
         return ""
+
+    def builtin_scenes(self) -> tuple[tuple[str, str, str], ...]:
+        """The named ready-made scenes of this system, ``(name, one-line description, TOML text)``, that
+        ``mechderive scenes`` lists and ``mechderive run NAME`` runs; none by default."""
+        return ()
 
     def __repr__(self) -> str:
         return f"<system {self.name!r}>"
