@@ -2,8 +2,9 @@
 
 Each system owns its named scenes (:meth:`mechderive.systems.base.System.builtin_scenes`); this module
 lists them system by system, the scene called ``default`` (what ``mechderive run`` runs without a
-scene) and the rest of its system's first, then the other systems' in the registry's order.  The texts are ordinary scene files
-(:mod:`.schema`), so ``scene_text(name)`` can be saved, edited and run again.
+scene) and the rest of its system's first, then the other systems' in the registry's order.  The
+texts are ordinary scene files (:mod:`.schema`), so ``scene_text(name)`` can be saved, edited and
+run again.
 
 A scene is looked up system by system, so loading one imports only the systems listed before its own.
 

@@ -104,7 +104,6 @@ from ..systems.scene_keys import check_keys as _check_keys
 from ..systems.scene_keys import choice as _choice
 from ..systems.scene_keys import fail as _fail
 from ..systems.scene_keys import key_name as _key_name
-from ..systems.scene_keys import literal as _literal
 from ..systems.scene_keys import number as _number
 from ..systems.scene_keys import one_of as _one_of
 from ..systems.scene_keys import show as _show
