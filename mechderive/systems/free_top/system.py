@@ -411,6 +411,13 @@ class FreeTop(System):
 
         return check_system()
 
+    def first_order_model(self) -> tuple:
+        """(Euler's equations (3.33) ω̇ = f(ω), (ω1, ω2, ω3), (I1, I2, I3)) for the generic linearization
+        (the stability coefficient A (3.44)-(3.45) about a steady rotation)."""
+        from . import model as fm
+
+        return fm.model().free_rhs, fm.omega_symbols(), (fm.I1, fm.I2, fm.I3)
+
     def plot(self, result: Any, figure: Any) -> bool:
         """Left, the polhode (3.4.4): ω(t) on the inertia ellipsoid I1 ω1² + I2 ω2² + I3 ω3² = 2T (3.46),
         drawn as a wireframe with semi-axes √(2T / I_a), T the mean over the samples (constant for the

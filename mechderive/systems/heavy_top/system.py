@@ -623,6 +623,14 @@ class HeavyTop(System):
 
         return check_system()
 
+    def lagrangian_model(self) -> tuple:
+        """(L (3.62) in the state symbols, (φ, θ, ψ), (φ̇, θ̇, ψ̇), (I1, I3, M, g, l)) for the generic
+        linearization (the sleeping top's criterion (3.83) about θ = 0)."""
+        from . import model as hm
+
+        return (hm.model().state_lagrangian, (hm.phi, hm.theta, hm.psi), (hm.phi_dot, hm.theta_dot, hm.psi_dot),
+                tuple(hm.PARAMETERS))
+
     def plot(self, result: Any, figure: Any) -> bool:
         """Left, the path of the apex e3 on the unit sphere (3-D, over a faint wireframe sphere; the
         chapter's figure 44); right, θ(t)."""
