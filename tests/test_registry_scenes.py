@@ -212,6 +212,8 @@ def test_a_registered_system_runs_end_to_end(oscillator, tmp_path, capsys):
     assert json.loads(capsys.readouterr().out)["system"] == "test_oscillator"
     assert main(["scenes", "--quantities", "test_oscillator"]) == 0
     assert capsys.readouterr().out.splitlines()[0].split()[:2] == ["x", "m"]
+    assert main(["scenes", "--quantities", str(path)]) == 0  # a scene file: its system as it defines it
+    assert capsys.readouterr().out.splitlines()[1].split()[:2] == ["energy", "J/kg"]
     with pytest.raises(InvalidInputError, match=r"scene key \[parameters\]\.k: expected a number > 0, got -1"):
         load_scene(SCENE.replace("k = 4.0", "k = -1"))
     with pytest.raises(InvalidInputError, match=r"scene table \[initial\]: missing; system 'test_oscillator' "

@@ -33,7 +33,8 @@ def add_parsers(sub: "argparse._SubParsersAction") -> None:
                        "may output (name, unit, meaning).")
     s.add_argument("name", nargs="?", default=None)
     s.add_argument("--systems", action="store_true", help="list the systems (built in and registered)")
-    s.add_argument("--quantities", metavar="SYSTEM", help="list the quantities of SYSTEM, with unit and meaning")
+    s.add_argument("--quantities", metavar="SYSTEM", help="list the quantities of SYSTEM (a system's name, or a scene "
+                   "file: its system as the scene defines it), with unit and meaning")
     s.set_defaults(run=scenes)
 
 
@@ -190,10 +191,14 @@ def _systems() -> None:
 
 
 def _quantities(name: str) -> None:
-    """What a scene of the system ``name`` may output: each quantity with its unit and meaning."""
+    """What a scene of the system ``name`` (or of a scene file's system) may output: each quantity with its
+    unit and meaning."""
     from ..systems import registry
 
-    system = registry.get(name)
+    if name.endswith(".toml"):
+        system = _load(name).model  # a family (lagrangian) as the scene defines it
+    else:
+        system = registry.get(name)
     quantities = system.quantities
     if not quantities:
         print(f"{name}: the quantities depend on the scene's definition ({', '.join(system.extra_keys)})")
