@@ -26,9 +26,15 @@ def add_parsers(sub: "argparse._SubParsersAction") -> None:
     p.add_argument("--no-cache", action="store_true", help="do not read or write the disk cache of compiled code")
     p.set_defaults(run=run)
 
-    s = sub.add_parser("scenes", help="list the built-in scenes, or print one as TOML",
-                       description="Without NAME, list the built-in scenes; with NAME, print it as TOML to start from.")
+    s = sub.add_parser("scenes", help="list the built-in scenes, or print one as TOML; list the systems and "
+                       "their quantities",
+                       description="Without NAME, list the built-in scenes; with NAME, print it as TOML to start from.  "
+                       "--systems lists the systems a scene may name, --quantities SYSTEM what a scene of SYSTEM "
+                       "may output (name, unit, meaning).")
     s.add_argument("name", nargs="?", default=None)
+    s.add_argument("--systems", action="store_true", help="list the systems (built in and registered)")
+    s.add_argument("--quantities", metavar="SYSTEM", help="list the quantities of SYSTEM (a system's name, or a scene "
+                   "file: its system as the scene defines it), with unit and meaning")
     s.set_defaults(run=scenes)
 
 
@@ -44,12 +50,12 @@ def _exists(path: Path, shown: str) -> bool:
 
 
 def _load(spec: str | None):
-    from ..scenes.builtin import list_scenes, load_builtin
+    from ..scenes.builtin import DEFAULT, list_scenes, load_builtin
     from ..scenes.output import _shown
     from ..scenes.schema import load_scene
 
     if spec is None:
-        return load_builtin("default")
+        return load_builtin(DEFAULT)
     path = Path(spec)
     shown = _shown(spec)
     exists = _exists(path, shown)
@@ -61,10 +67,6 @@ def _load(spec: str | None):
     if spec in names:
         return load_builtin(spec)
     raise InvalidInputError(f"scene {shown}: expected a .toml file or a built-in scene ({', '.join(names)})")
-
-
-_PLOT_NEEDS = {"heavy_top": ("theta", "apex_x", "apex_y", "apex_z"), "free_top": ("omega1", "omega2", "omega3"),
-               "falling_cat": ("flip_angle",)}
 
 
 def _check_targets(args: argparse.Namespace) -> None:
@@ -100,7 +102,7 @@ def run(args: argparse.Namespace) -> int:
     parse_s = time.perf_counter() - start
     solve_scene = scene
     if args.plot:
-        extra = tuple(q for q in _PLOT_NEEDS[scene.system] if q not in scene.quantities)
+        extra = tuple(q for q in scene.model.plot_quantities if q not in scene.quantities)
         solve_scene = dataclasses.replace(scene, quantities=scene.quantities + extra)
     with Progress(3, label=f"{scene.name or 'scene'}") as bar:
         bar.update(1)
@@ -113,12 +115,9 @@ def run(args: argparse.Namespace) -> int:
 
             write_table(args.output, result.t, columns, what="-o")
         if args.plot:
-            from ..scenes.plot import plot_scene
+            from ..scenes.plot import plot_result
 
-            extra = {"title": f"{scene.name or scene.system}"}
-            if scene.system == "free_top":
-                extra["moments"] = (scene.parameters["I1"], scene.parameters["I2"], scene.parameters["I3"])
-            plot_scene(scene.system, {"t": result.t, **result.columns}, args.plot, extra=extra, what="--plot")
+            plot_result(result, args.plot, title=f"{scene.name or scene.system}", what="--plot")
         bar.update(1)
     report = dict(result.report)
     report["timings"] = {"parse": round(parse_s, 6), **report["timings"],
@@ -165,9 +164,46 @@ def _summary(scene, result, report, args) -> None:
 def scenes(args: argparse.Namespace) -> int:
     from ..scenes.builtin import list_scenes, scene_text
 
+    if args.systems or args.quantities is not None:
+        if args.name is not None:
+            raise InvalidInputError(f"scenes: expected NAME or --systems/--quantities, got both ({args.name!r})")
+        if args.systems:
+            _systems()
+        if args.quantities is not None:
+            _quantities(args.quantities)
+        return 0
     if args.name is None:
         for name, description in list_scenes():
             print(f"{name:<26} {description}")
         return 0
     sys.stdout.write(scene_text(args.name))
     return 0
+
+
+def _systems() -> None:
+    """Each system a scene may name, with its chapter section and what it is (from the registry)."""
+    from ..systems import registry
+
+    for name in registry.names():
+        system = registry.get(name)
+        section = f" ({system.section})" if system.section else ""
+        print(f"{name:<14} {system.summary}{section}")
+
+
+def _quantities(name: str) -> None:
+    """What a scene of the system ``name`` (or of a scene file's system) may output: each quantity with its
+    unit and meaning."""
+    from ..systems import registry
+
+    if name.endswith(".toml"):
+        system = _load(name).model  # a family (lagrangian) as the scene defines it
+    else:
+        system = registry.get(name)
+    quantities = system.quantities
+    if not quantities:
+        print(f"{name}: the quantities depend on the scene's definition ({', '.join(system.extra_keys)})")
+        return
+    width = max(len(q.name) for q in quantities)
+    units = max(len(q.unit or "1") for q in quantities)
+    for q in quantities:
+        print(f"{q.name:<{width}}  {q.unit or '1':<{units}}  {q.meaning}")

@@ -8,13 +8,13 @@ evaluated as code (no ``eval``, no ``sympify``), so a string such as
 The format (optional keys marked)::
 
     name = "my top"           # optional: a printable label (1-100 characters)
-    system = "heavy_top"      # "free_top" | "heavy_top" | "falling_cat"
+    system = "heavy_top"      # a registered system: `mechderive scenes --systems` lists them
     method = "auto"           # optional: "auto" | "exact" | "integrate" (default "auto")
     rtol = 1e-10              # optional: relative accuracy in [1e-15, 1e-2] (default 1e-9)
     strict = false            # optional (default true): accept moments no rigid body has (see below)
 
-    [parameters]              # heavy_top: I1 I3 M g l, or I1 I3 Mgl; free_top: I1 I2 I3;
-                              # falling_cat: registered names
+    [parameters]              # the system's own keys, checked by the system (heavy_top: I1 I3 M g l,
+                              # or I1 I3 Mgl; free_top: I1 I2 I3; falling_cat: optional, open)
     I1 = 1.0
     ...
 
@@ -28,6 +28,9 @@ The format (optional keys marked)::
 
     [output]
     quantities = ["theta", "phi", "psi"]   # names from QUANTITIES[system], each once
+                                           # (`mechderive scenes --quantities SYSTEM` lists them)
+
+    coordinates = [...]       # a system's own top-level keys and tables (its ``extra_keys``), if any
 
 ``strict = false`` waives the rigid-body conditions — the triangle inequalities of a free
 top's moments, a heavy top's I1 - M l² ≥ I3/2 (I1 ≥ I3/2 with ``Mgl``) — which published
@@ -76,7 +79,6 @@ True
 
 from __future__ import annotations
 
-import datetime
 import math
 import os
 import re
@@ -84,24 +86,33 @@ import secrets
 import stat
 import sys
 import tomllib
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Iterable, Mapping
+from typing import Any, Iterable
 
 import numpy as np
 
-from ..errors import InvalidInputError, NonFiniteValueError
+from ..errors import InvalidInputError
 from ..systems import registry
-from ..systems.heavy_top import parameters as heavy_top_parameters
+from ..systems.base import Key, Quantity, System
+from ..systems.scene_keys import NAME_PATTERN as _NAME_PATTERN
+from ..systems.scene_keys import Underflowed as _Underflowed
+from ..systems.scene_keys import Unrepresentable as _Unrepresentable
+from ..systems.scene_keys import as_table as _as_table
+from ..systems.scene_keys import check_keys as _check_keys
+from ..systems.scene_keys import choice as _choice
+from ..systems.scene_keys import fail as _fail
+from ..systems.scene_keys import key_name as _key_name
+from ..systems.scene_keys import number as _number
+from ..systems.scene_keys import one_of as _one_of
+from ..systems.scene_keys import show as _show
 
 __all__ = [
     "Scene",
     "SizeEstimate",
-    "SYSTEMS",
     "METHODS",
     "QUANTITIES",
-    "SYSTEM_PARAMETERS",
-    "FALLING_CAT_PARAMETERS",
     "load_scene",
     "waived",
     "parse_scene",
@@ -110,7 +121,6 @@ __all__ = [
     "register_system_quantities",
 ]
 
-SYSTEMS = ("free_top", "heavy_top", "falling_cat")
 METHODS = ("auto", "exact", "integrate")
 DEFAULT_METHOD = "auto"
 DEFAULT_RTOL = 1e-9
@@ -121,12 +131,8 @@ MAX_SCENE_BYTES = 1_000_000  # a scene is a page of text; refuse anything far la
 
 #: The largest run a scene may ask for (bytes): its estimated peak memory, and its table written as CSV,
 #: must each stay within it (:attr:`Scene.size_estimate`), so that a scene cannot exhaust a shared machine.
+#: The solve's own memory per sample is its system's measured ``bytes_per_sample``.
 MAX_RUN_BYTES = 1_000_000_000
-#: Peak memory of each system's solve per sample beyond the table (bytes), an upper bound of the growth of
-#: the process's maxrss measured from 4·10⁴ (falling_cat) or 5·10⁵ samples, closed form and integration,
-#: one quantity and all: heavy_top 360-510, free_top 225-490, falling_cat 11,250 (its L is taken by
-#: differences over a 9-point stencil of rotations per sample).
-_SOLVE_BYTES_PER_SAMPLE = {"free_top": 600, "heavy_top": 600, "falling_cat": 12_500}
 #: Memory per value of the table (bytes): the float64 column, the arrays the quantities are taken from and
 #: the CSV writer's rows (measured 11-25 per column and sample on top of the solve).
 _BYTES_PER_VALUE = 30
@@ -139,244 +145,39 @@ TABLES = ("parameters", "initial", "time", "output")
 TIME_KEYS = ("t_end", "samples")
 OUTPUT_KEYS = ("quantities",)
 
-_R = tuple(f"R{i}{j}" for i in (1, 2, 3) for j in (1, 2, 3))
 
-#: The quantity names a scene may ask for, per system, in a fixed order.
-QUANTITIES: dict[str, tuple[str, ...]] = {
-    "free_top": ("omega1", "omega2", "omega3", "L1", "L2", "L3", "energy", "L_norm", *_R,
-                 "phi", "theta", "psi", "q0", "q1", "q2", "q3"),
-    "heavy_top": ("theta", "phi", "psi", "theta_dot", "phi_dot", "psi_dot", "u", "energy", "p_phi", "p_psi",
-                  "omega1", "omega2", "omega3", *_R, "apex_x", "apex_y", "apex_z"),
-    "falling_cat": (*_R, "q0", "q1", "q2", "q3", "flip_angle", "L1", "L2", "L3", "shape_bend", "shape_swivel"),
-}
+class _Quantities(Mapping):
+    """system name -> the quantity names a scene of it may ask for, in a fixed order (from the registry)."""
 
-#: The falling cat's parameters, all optional: lengths and a mass > 0, ``peak_bend`` in (0, π)
-#: (mechderive.systems.deformable.cat.check_cat_parameters validates them, and is called here).
-FALLING_CAT_PARAMETERS: tuple[str, ...] = ("half_mass", "joint_offset", "radius", "half_length", "peak_bend")
-_CAT_RANGES: dict[str, tuple[str, Callable[[float], bool]]] = {
-    **{k: ("a number > 0", lambda x: x > 0) for k in FALLING_CAT_PARAMETERS},
-    "peak_bend": ("a number in (0, π) (rad: the halves must not fold through each other)",
-                  lambda x: 0 < x < math.pi),
-}
+    def __getitem__(self, system: str) -> tuple[str, ...]:
+        return registry.get(system).quantity_names()  # an unknown name: InvalidInputError listing the known
 
-#: The [parameters] names per system.  free_top needs all of its; heavy_top all of
-#: I1 I3 M g l or all of I1 I3 Mgl; falling_cat's are optional and open to
-#: :func:`register_system_parameters`.
-SYSTEM_PARAMETERS: dict[str, tuple[str, ...]] = {
-    "free_top": ("I1", "I2", "I3"),
-    "heavy_top": (*heavy_top_parameters.PARAM_KEYS, "Mgl"),
-    "falling_cat": FALLING_CAT_PARAMETERS,
-}
-_OPEN_PARAMETERS = ("falling_cat",)
-_FREE_TOP_ANGLES = ("phi", "theta", "psi")
-_INITIAL_NAMES: dict[str, tuple[str, ...]] = {
-    "free_top": ("omega", *_FREE_TOP_ANGLES),
-    "heavy_top": heavy_top_parameters.INITIAL_NAMES,
-    "falling_cat": (),
-}
-#: The physics checks' way out (their STRICT_HINT), as said to a scene's author.
-_SCENE_STRICT_HINT = "add strict = false to the scene to accept moments no rigid body has"
-_NAME_PATTERN = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")  # a bare TOML key and a Python identifier
+    def __contains__(self, system: object) -> bool:
+        return system in registry.names()
+
+    def __iter__(self):
+        return iter(registry.names())
+
+    def __len__(self) -> int:
+        return len(registry.names())
 
 
-# ----------------------------------------------------------------------------- numbers
-
-#: The largest finite double, as messages state the range of every number a scene holds.
-_LARGEST = sys.float_info.max
+#: The quantity names a scene may ask for, per system, in a fixed order (each system's ``quantities``).
+QUANTITIES: Mapping[str, tuple[str, ...]] = _Quantities()
 
 
-class _Unrepresentable:
-    """A number the scene's text spells but no double holds: ``1e400``, an integer of 401 digits.
+# ----------------------------------------------------------------------------- checks of the scene itself
 
-    Made by the TOML reader (:func:`_parse_toml`) in place of ``inf`` or an exception, so that the
-    check of the key it is found under refuses it by name.
-    """
-
-    def __init__(self, text: str) -> None:
-        self.text = text
-
-    def __repr__(self) -> str:
-        return _literal(self.text)
+def _system(value: Any) -> System:
+    """The registered system a scene's ``system`` names (refused with the list of those known)."""
+    return registry.get(_choice("system", value, registry.names()))
 
 
-class _Underflowed(float):
-    """A nonzero float literal that is 0 in double precision (``1e-400``); it is 0 wherever 0 is allowed."""
-
-    text: str
-
-    def __repr__(self) -> str:
-        return f"{_literal(self.text)} (0 in double precision)"
-
-
-def _literal(text: str) -> str:
-    """A number as the scene spells it, shortened if it is long (``1e-`` and 5000 digits)."""
-    return text if len(text) <= 40 else f"{text[:12]}...{text[-12:]} (a number of {len(text)} characters)"
-
-
-def _digits(n: int) -> int:
-    """The number of decimal digits of ``n``, without converting it to text (huge ints refuse that)."""
-    n = abs(n)
-    d = max(1, int(n.bit_length() * 0.30102999566398120))  # log10(2): exact or one short
-    return d + (n >= 10 ** d)
-
-
-# ----------------------------------------------------------------------------- messages
-
-def _show(value: Any, depth: int = 0) -> str:
-    """The value as the message shows it: short, escaped, on one line, with its TOML kind when that helps."""
-    if isinstance(value, bool):
-        return f"{str(value).lower()} (a boolean)"
-    if isinstance(value, (int, np.integer)) and _digits(int(value)) > 40:
-        return f"an integer of {_digits(int(value))} digits"
-    if isinstance(value, (int, float, _Unrepresentable)):
-        return repr(value)
-    if isinstance(value, str):
-        text = repr(value)
-        return text if len(text) <= 80 else text[:70] + "...' (truncated)"
-    if isinstance(value, Mapping):
-        return "a table"
-    if isinstance(value, (datetime.date, datetime.time)):
-        return f"{value.isoformat()} (a date/time)"
-    if isinstance(value, (list, tuple)):
-        if depth > 2 or len(value) > 20:
-            return f"a list of {len(value)} items"
-        text = "[" + ", ".join(_show(v, depth + 1) for v in value) + "]"
-        return text if len(text) <= 80 else f"a list of {len(value)} items"
-    return f"a {type(value).__name__}"
-
-
-def _key_name(key: Any) -> str:
-    """A key as the message shows it: bare if it is a plain name, else quoted and escaped."""
-    if isinstance(key, str) and _NAME_PATTERN.fullmatch(key) and len(key) <= 40:
-        return key
-    return _show(key)
-
-
-def _at(table: str | None, key: Any) -> str:
-    return f"[{table}].{_key_name(key)}" if table else _key_name(key)
-
-
-def _fail(where: str, expected: str, value: Any, error: type[InvalidInputError] = InvalidInputError) -> None:
-    raise error(f"scene key {where}: expected {expected}, got {_show(value)}")
-
-
-def _one_of(names: Iterable[str]) -> str:
-    return ", ".join(names)
-
-
-# ----------------------------------------------------------------------------- value checks
-
-def _number(where: str, value: Any, *, expected: str = "a finite number",
-            valid: Callable[[float], bool] = lambda x: True) -> float:
-    """``value`` as a float; bool and non-numbers are refused, ints accepted, NaN/inf refused.
-
-    Every number of a scene is a finite double: a value spelled beyond ±1.8e308 (``1e400``, an
-    integer of 400 digits) is refused as not finite, naming the key, rather than read as inf.
-    """
-    finite = f"{expected} (a finite double: at most {_LARGEST:.2g} in size)"
-    if isinstance(value, _Unrepresentable):
-        _fail(where, finite, value, NonFiniteValueError)
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        _fail(where, expected, value)
-    try:
-        x = float(value)
-    except OverflowError:  # an int beyond the largest double
-        _fail(where, finite, value, NonFiniteValueError)
-    if not math.isfinite(x):
-        _fail(where, expected, x, NonFiniteValueError)
-    if not valid(x):
-        _fail(where, expected, value)
-    return x
-
-
-def _choice(where: str, value: Any, allowed: tuple[str, ...]) -> str:
-    if not isinstance(value, str) or value not in allowed:
-        _fail(where, "one of " + ", ".join(repr(a) for a in allowed), value)
-    return value
-
-
-def _check_keys(given: Mapping[str, Any], table: str, allowed: tuple[str, ...], required: tuple[str, ...],
-                what: str) -> None:
-    for key in given:
-        if key not in allowed:
-            allowed_text = f"expected one of {_one_of(allowed)}" if allowed else "it takes none"
-            raise InvalidInputError(f"scene key {_at(table, key)}: unknown {what}; {allowed_text}")
-    for key in required:
-        if key not in given:
-            raise InvalidInputError(f"scene key {_at(table, key)}: missing; expected all of {_one_of(required)}")
-
-
-def _as_table(where: str, value: Any) -> Mapping[str, Any]:
-    if not isinstance(value, Mapping):
-        raise InvalidInputError(f"scene table {where}: expected a table, got {_show(value)}")
-    return value
-
-
-def _rename_keys(exc: InvalidInputError, table: str, names: tuple[str, ...]) -> InvalidInputError:
-    """Re-word an error of a physics check so that it names the scene keys it is about."""
-    message = str(exc)
-    claim = message.split(";")[0]  # the checked relation; later clauses are hints
-    involved = [k for k in names if re.search(rf"(?<![A-Za-z0-9_]){re.escape(k)}(?![A-Za-z0-9_])", claim)]
-    where = ("scene key" + ("s " if len(involved) > 1 else " ") + ", ".join(f"[{table}].{k}" for k in involved)
-             if involved else f"scene table [{table}]")
-    return type(exc)(f"{where}: {message}")
-
-
-# ----------------------------------------------------------------------------- per-system checks
-
-def _heavy_top_names(given: Mapping[str, Any]) -> tuple[str, ...]:
-    """The heavy top's parameter names in the form the scene uses: I1 I3 M g l, or I1 I3 Mgl."""
-    _check_keys(given, "parameters", SYSTEM_PARAMETERS["heavy_top"], (), "parameter for system 'heavy_top'")
-    separate = [k for k in ("M", "g", "l") if k in given]
-    if "Mgl" in given and separate:
-        raise InvalidInputError("scene keys " + ", ".join(_at("parameters", k) for k in ("Mgl", *separate))
-                                + ": expected either Mgl or all of M, g, l (only M g l enters the motion), got both")
-    names = heavy_top_parameters.MGL_KEYS if "Mgl" in given else heavy_top_parameters.PARAM_KEYS
-    for key in names:
-        if key not in given:
-            raise InvalidInputError(f"scene key {_at('parameters', key)}: missing; expected all of "
-                                    + (f"{_one_of(names)}, or {_one_of(heavy_top_parameters.MGL_KEYS)} "
-                                       "(only M g l enters the motion)" if "Mgl" not in names else _one_of(names)))
-    return names
-
-
-def _parameters(system: str, given: Mapping[str, Any], strict: bool = True) -> dict[str, float]:
-    given = _as_table("[parameters]", given)
-    names = SYSTEM_PARAMETERS[system]
-    if system == "heavy_top":
-        names = _heavy_top_names(given)
-    else:
-        required = () if system in _OPEN_PARAMETERS else names
-        _check_keys(given, "parameters", names, required, f"parameter for system {system!r}")
-    if system == "falling_cat":
-        p = {}
-        for k in (k for k in names if k in given):  # registered names: any finite number
-            expected, valid = _CAT_RANGES.get(k, ("a finite number", lambda x: True))
-            p[k] = _number(_at("parameters", k), given[k], expected=expected, valid=valid)
-        from ..systems.deformable.cat import check_cat_parameters  # no SymPy: only the checks
-
-        try:
-            check_cat_parameters({k: v for k, v in p.items() if k in FALLING_CAT_PARAMETERS})
-        except InvalidInputError as exc:
-            raise _rename_keys(exc, "parameters", names) from exc
-        return p
-    expected = "a number > 0" + ("" if strict else " (strict = false does not waive this)")
-    p = {k: _number(_at("parameters", k), given[k], expected=expected, valid=lambda x: x > 0) for k in names}
-    # Sums and squares of moments near the largest double overflow to ±inf, which the comparisons order
-    # rightly (I1 + I2 = inf >= I3): the checks' answers stand; NumPy's RuntimeWarnings would only be noise
-    # printed before the message.
-    try:
-        with np.errstate(all="ignore"):
-            if system == "heavy_top":
-                heavy_top_parameters.check_params(p, strict=strict)
-            else:
-                from ..inertia.validate import check_principal_moments  # imports SymPy: only when needed
-
-                check_principal_moments(p["I1"], p["I2"], p["I3"], strict=strict)
-    except InvalidInputError as exc:
-        renamed = _rename_keys(exc, "parameters", names)
-        raise type(renamed)(str(renamed).replace(heavy_top_parameters.STRICT_HINT, _SCENE_STRICT_HINT)) from exc
-    return p
+def _needed_tables(system: System) -> tuple[str, ...]:
+    """The tables a scene of ``system`` must have: [parameters] and [initial] where it requires a key of
+    them, then [time] and [output]."""
+    return tuple(t for t, keys in (("parameters", system.parameters), ("initial", system.initial))
+                 if any(k.required for k in keys)) + ("time", "output")
 
 
 def waived(scene: "Scene") -> list[str]:
@@ -384,45 +185,9 @@ def waived(scene: "Scene") -> list[str]:
 
     Empty for a strict scene (nothing was waived) and for one whose body is physical anyway.
     """
-    if scene.strict or scene.system == "falling_cat":
+    if scene.strict:
         return []
-    if scene.system not in SYSTEMS:
-        return list(scene.model.waived(scene.parameters))
-    p = scene.parameters
-    with np.errstate(all="ignore"):  # as in _parameters
-        if scene.system == "heavy_top":
-            return heavy_top_parameters.rigid_body_violations(p)
-        from ..inertia.validate import rigid_body_violations
-
-        return rigid_body_violations(p["I1"], p["I2"], p["I3"])
-
-
-def _initial(system: str, given: Mapping[str, Any]) -> dict[str, Any]:
-    given = _as_table("[initial]", given)
-    names = _INITIAL_NAMES[system]
-    if system == "heavy_top":
-        _check_keys(given, "initial", names, names, "initial value for system 'heavy_top'")
-        s = {k: _number(_at("initial", k), given[k]) for k in names}
-        _number("[initial].theta", s["theta"], expected="a number in [0, π]", valid=lambda x: 0 <= x <= math.pi)
-        try:
-            heavy_top_parameters.check_initial(s)
-        except InvalidInputError as exc:
-            raise _rename_keys(exc, "initial", names) from exc
-        return s
-    if system == "free_top":
-        _check_keys(given, "initial", names, ("omega",), "initial value for system 'free_top'")
-        omega = given["omega"]
-        if not isinstance(omega, (list, tuple)) or len(omega) != 3:
-            _fail("[initial].omega", "a list of 3 finite numbers [w1, w2, w3] (rad/s)", omega)
-        state: dict[str, Any] = {"omega": tuple(_number(f"[initial].omega[{i}]", w) for i, w in enumerate(omega))}
-        state.update({k: _number(_at("initial", k), given.get(k, 0.0)) for k in _FREE_TOP_ANGLES})
-        return state
-    _check_keys(given, "initial", names, (), f"initial value for system {system!r}")
-    return {}
-
-
-def _quantities(system: str, value: Any) -> tuple[str, ...]:
-    return _quantity_list(system, value, QUANTITIES[system])
+    return list(scene.model.waived(scene.parameters))
 
 
 def _quantity_list(system: str, value: Any, allowed: tuple[str, ...]) -> tuple[str, ...]:
@@ -479,10 +244,7 @@ class SizeEstimate:
         """The estimate for ``samples`` samples of ``quantities`` quantities (and ``t``) of ``system``."""
         columns = quantities + 1
         values = samples * columns
-        if system in _SOLVE_BYTES_PER_SAMPLE:
-            per_sample = _SOLVE_BYTES_PER_SAMPLE[system]
-        else:
-                per_sample = registry.get(system).bytes_per_sample
+        per_sample = registry.get(system).bytes_per_sample
         return cls(samples, columns, values, 8 * values, _CSV_BYTES_PER_VALUE * values,
                    samples * per_sample + _BYTES_PER_VALUE * values)
 
@@ -510,11 +272,12 @@ def _check_size(scene: "Scene") -> None:
 class Scene:
     """One checked scene.  Constructing it validates and normalises every field.
 
-    Numbers become floats (``samples`` stays an int), ``quantities`` a tuple, a
-    free top's ``initial`` holds ``omega`` as a 3-tuple and ``phi theta psi``
-    (default 0); a heavy top's ``parameters`` keep the form given (``M g l`` or ``Mgl``).
-    ``strict=False`` accepts moments no rigid body has (:func:`waived` lists them).
-    Invalid fields raise :class:`~mechderive.errors.InvalidInputError`.
+    The system (:mod:`mechderive.systems.registry`) checks its own ``parameters`` and ``initial``
+    (:meth:`~mechderive.systems.base.System.check_parameters`, ``check_initial``): numbers become
+    floats (``samples`` stays an int), ``quantities`` a tuple; e.g. a free top's ``initial`` holds
+    ``omega`` as a 3-tuple and ``phi theta psi`` (default 0), a heavy top's ``parameters`` keep the
+    form given (``M g l`` or ``Mgl``).  ``strict=False`` accepts moments no rigid body has
+    (:func:`waived` lists them).  Invalid fields raise :class:`~mechderive.errors.InvalidInputError`.
     """
 
     system: str
@@ -537,35 +300,12 @@ class Scene:
         set_(self, "name", _name(self.name))
         if not isinstance(self.strict, bool):
             _fail("strict", "true or false (a boolean; false accepts moments no rigid body has)", self.strict)
-        if self.system not in SYSTEMS:
-            self._post_init_registered()
-            return
-        set_(self, "definition", {})
-        system = _choice("system", self.system, SYSTEMS)
-        set_(self, "method", _choice("method", self.method, METHODS))
-        lo, hi = RTOL_RANGE
-        set_(self, "rtol", _number("rtol", self.rtol, expected=f"a number in [{lo:g}, {hi:g}]",
-                                   valid=lambda x: lo <= x <= hi))
-        set_(self, "parameters", _parameters(system, self.parameters, self.strict))
-        set_(self, "initial", _initial(system, self.initial))
-        set_(self, "t_end", _number("[time].t_end", self.t_end, expected="a finite number > 0",
-                                    valid=lambda x: x > 0))
-        if (isinstance(self.samples, bool) or not isinstance(self.samples, (int, np.integer))
-                or not 2 <= self.samples <= MAX_SAMPLES):
-            _fail("[time].samples", f"an integer in [2, {MAX_SAMPLES}]", self.samples)
-        set_(self, "samples", int(self.samples))
-        set_(self, "quantities", _quantities(system, self.quantities))
-        _check_size(self)
-
-    def _post_init_registered(self) -> None:
-        """Check the fields of a scene of a registered system through the system itself."""
-        set_ = object.__setattr__
-        system = registry.get(self.system) if isinstance(self.system, str) else _choice("system", self.system,
-                                                                                         registry.names())
+        system = _system(self.system)
         model = system.configure(dict(self.definition or {}))
         set_(self, "model", model)
         set_(self, "definition", dict(self.definition or {}))
-        set_(self, "method", _choice("method", self.method, ("auto", *model.methods)))
+        set_(self, "method", _choice("method", self.method, METHODS + tuple(m for m in model.methods
+                                                                              if m not in METHODS)))
         lo, hi = RTOL_RANGE
         set_(self, "rtol", _number("rtol", self.rtol, expected=f"a number in [{lo:g}, {hi:g}]",
                                    valid=lambda x: lo <= x <= hi))
@@ -594,7 +334,9 @@ class Scene:
 def parse_scene(mapping: Mapping[str, Any], *, name: str | None = None) -> Scene:
     """Check a parsed TOML document (a mapping) and return its :class:`Scene`.
 
-    ``name`` overrides the document's optional ``name`` key.
+    ``name`` overrides the document's optional ``name`` key.  Besides the keys and tables of every
+    scene, a system may read its own (its ``extra_keys``: a top-level key, a table, or
+    ``output.expressions`` for an ``[output.expressions]`` table).
 
     >>> parse_scene({"system": "falling_cat", "time": {"t_end": 1, "samples": 2},
     ...              "output": {"quantities": ["flip_angle"]}}).initial
@@ -607,57 +349,30 @@ method, rtol, strict and tables [parameters], [initial], [time], [output]
     """
     if not isinstance(mapping, Mapping):
         raise InvalidInputError(f"scene: expected a table of keys (a mapping), got {_show(mapping)}")
-    if isinstance(mapping.get("system"), str) and mapping["system"] not in SYSTEMS:
-        return _parse_registered(mapping, name)
-    tables = ", ".join(f"[{t}]" for t in TABLES)
-    for key, value in mapping.items():
-        if key in TABLES:
-            _as_table(f"[{key}]", value)
-        elif key not in TOP_LEVEL_KEYS:
-            if isinstance(value, Mapping):
-                raise InvalidInputError(f"scene table [{_key_name(key)}]: unknown table; expected one of {tables}")
-            raise InvalidInputError(f"scene key {_key_name(key)}: unknown key; expected top-level keys "
-                                    f"{_one_of(TOP_LEVEL_KEYS)} and tables {tables}")
-    if "system" not in mapping:
-        raise InvalidInputError("scene key system: missing; expected one of "
-                                + ", ".join(repr(s) for s in SYSTEMS))
-    system = _choice("system", mapping["system"], SYSTEMS)
-    needed = [t for t in ("time", "output") if t not in mapping]
-    if system != "falling_cat":
-        needed = [t for t in ("parameters", "initial") if t not in mapping] + needed
-    if needed:
-        raise InvalidInputError(f"scene table [{needed[0]}]: missing; system {system!r} needs tables "
-                                + (", ".join(f"[{t}]" for t in TABLES) if system != "falling_cat"
-                                   else "[time], [output]"))
-    time, output = mapping["time"], mapping["output"]
-    _check_keys(time, "time", TIME_KEYS, TIME_KEYS, "key")
-    _check_keys(output, "output", OUTPUT_KEYS, OUTPUT_KEYS, "key")
-    return Scene(system=system, method=mapping.get("method", DEFAULT_METHOD), rtol=mapping.get("rtol", DEFAULT_RTOL),
-                 parameters=mapping.get("parameters", {}), initial=mapping.get("initial", {}),
-                 t_end=time["t_end"], samples=time["samples"], quantities=output["quantities"],
-                 name=name if name is not None else mapping.get("name"),
-                 strict=mapping.get("strict", DEFAULT_STRICT))
-
-
-def _parse_registered(mapping: Mapping[str, Any], name: str | None) -> Scene:
-    system = registry.get(mapping["system"]) if mapping["system"] in registry.names() else _choice(
-        "system", mapping["system"], registry.names())
-    extra = tuple(system.extra_keys)
+    given = mapping.get("system")
+    system = registry.get(given) if isinstance(given, str) and given in registry.names() else None
+    extra = tuple(system.extra_keys) if system is not None else ()
     tables = ", ".join(f"[{t}]" for t in TABLES)
     for key, value in mapping.items():
         if key in TABLES:
             _as_table(f"[{key}]", value)
         elif key not in TOP_LEVEL_KEYS and key not in extra:
-            allowed = _one_of(TOP_LEVEL_KEYS + extra)
+            if isinstance(value, Mapping) and not extra:
+                raise InvalidInputError(f"scene table [{_key_name(key)}]: unknown table; expected one of {tables}")
             raise InvalidInputError(f"scene key {_key_name(key)}: unknown key; expected top-level keys "
-                                    f"{allowed} and tables {tables}")
-    needed = [t for t in ("time", "output") if t not in mapping]
-    if needed:
-        raise InvalidInputError(f"scene table [{needed[0]}]: missing; system {system.name!r} needs tables "
-                                "[time], [output]")
+                                    f"{_one_of(TOP_LEVEL_KEYS + extra)} and tables {tables}")
+    if "system" not in mapping:
+        raise InvalidInputError("scene key system: missing; expected one of "
+                                + ", ".join(repr(s) for s in registry.names()))
+    system = _system(given)
+    needed = _needed_tables(system)
+    missing = [t for t in needed if t not in mapping]
+    if missing:
+        raise InvalidInputError(f"scene table [{missing[0]}]: missing; system {system.name!r} needs tables "
+                                + ", ".join(f"[{t}]" for t in needed))
     time, output = mapping["time"], mapping["output"]
     _check_keys(time, "time", TIME_KEYS, TIME_KEYS, "key")
-    out_keys = ("quantities", *(k for k in ("expressions",) if "output.expressions" in extra))
+    out_keys = OUTPUT_KEYS + (("expressions",) if "output.expressions" in extra else ())
     _check_keys(output, "output", out_keys, OUTPUT_KEYS, "key")
     definition = {k: mapping[k] for k in extra if k in mapping and not k.startswith("output.")}
     if "output.expressions" in extra and "expressions" in output:
@@ -877,46 +592,58 @@ def scene_to_toml(scene: Scene) -> str:
     lines = [f"name = {_toml_string(scene.name)}"] if scene.name is not None else []
     lines += [f"system = {_toml_string(scene.system)}", f"method = {_toml_string(scene.method)}",
               f"rtol = {_toml_value(scene.rtol)}"] + (["strict = false"] if not scene.strict else [])
+    own = {k: v for k, v in scene.definition.items() if isinstance(v, Mapping)}  # the system's own tables
+    lines += [f"{k} = {_toml_value(v)}" for k, v in scene.definition.items() if k not in own]
     for table, content in (("parameters", scene.parameters), ("initial", scene.initial),
                            ("time", {"t_end": scene.t_end, "samples": scene.samples}),
-                           ("output", {"quantities": scene.quantities})):
+                           ("output", {"quantities": scene.quantities}), *own.items()):
         if content:
-            lines += ["", f"[{table}]"] + [f"{k} = {_toml_value(v)}" for k, v in content.items()]
+            lines += ["", f"[{table}]"] + [f"{_toml_key(k)} = {_toml_value(v)}" for k, v in content.items()]
     return "\n".join(lines) + "\n"
+
+
+def _toml_key(key: str) -> str:
+    return key if _NAME_PATTERN.fullmatch(key) else _toml_string(key)
 
 
 # ----------------------------------------------------------------------------- registration hooks
 
-def _check_new_names(system: str, names: Iterable[str], what: str) -> tuple[str, ...]:
-    if system not in SYSTEMS:
-        raise InvalidInputError(f"expected a system, one of {_one_of(SYSTEMS)}, got {_show(system)}")
+def _check_new_names(system: str, names: Iterable[str], what: str) -> tuple[System, tuple[str, ...]]:
+    if not isinstance(system, str) or system not in registry.names():
+        raise InvalidInputError(f"expected a system, one of {_one_of(registry.names())}, got {_show(system)}")
     if isinstance(names, str):
         raise InvalidInputError(f"expected a sequence of {what} names, got the single string {names!r}")
     names = tuple(names)
     for n in names:
         if not isinstance(n, str) or not _NAME_PATTERN.fullmatch(n):
             raise InvalidInputError(f"expected {what} names matching [A-Za-z_][A-Za-z0-9_]*, got {_show(n)}")
-    return names
+    return registry.get(system), names
 
 
 def register_system_parameters(system: str, names: Iterable[str]) -> None:
-    """Allow more (optional) [parameters] names for ``system``; only falling_cat's set is open.
+    """Allow more (optional) [parameters] names for ``system``, one whose parameters are open
+    (:attr:`~mechderive.systems.base.System.open_parameters`: the falling cat's); each takes any finite number.
 
     Registering a name twice is harmless, so a module may register at import.
     """
-    names = _check_new_names(system, names, "parameter")
-    if system not in _OPEN_PARAMETERS:
-        raise InvalidInputError(f"expected a system whose parameters are open ({_one_of(_OPEN_PARAMETERS)}), "
-                                f"got {system!r}, whose parameters are fixed: {_one_of(SYSTEM_PARAMETERS[system])}")
-    current = SYSTEM_PARAMETERS[system]
-    SYSTEM_PARAMETERS[system] = current + tuple(n for n in dict.fromkeys(names) if n not in current)
+    model, names = _check_new_names(system, names, "parameter")
+    if not model.open_parameters:
+        open_ = [n for n in registry.names() if registry.get(n).open_parameters]
+        raise InvalidInputError(f"expected a system whose parameters are open ({_one_of(open_)}), "
+                                f"got {system!r}, whose parameters are fixed: "
+                                f"{_one_of(k.name for k in model.parameters)}")
+    current = tuple(k.name for k in model.parameters)
+    model.parameters = model.parameters + tuple(Key(n, "", "a registered parameter", required=False)
+                                                for n in dict.fromkeys(names) if n not in current)
 
 
 def register_system_quantities(system: str, names: Iterable[str]) -> None:
-    """Allow more [output] quantity names for ``system`` (e.g. the falling cat's ``shape_*``).
+    """Allow more [output] quantity names for ``system`` (e.g. the falling cat's ``shape_*``); its solver
+    must compute them.
 
     Registering a name twice is harmless, so a module may register at import.
     """
-    names = _check_new_names(system, names, "quantity")
-    current = QUANTITIES[system]
-    QUANTITIES[system] = current + tuple(n for n in dict.fromkeys(names) if n not in current)
+    model, names = _check_new_names(system, names, "quantity")
+    current = model.quantity_names()
+    model.quantities = model.quantities + tuple(Quantity(n, "", "a registered quantity")
+                                                for n in dict.fromkeys(names) if n not in current)

@@ -155,6 +155,8 @@ class System:
     methods: tuple[str, ...] = ("integrate",)
     #: peak bytes a solve needs per output sample (the schema's memory guard)
     bytes_per_sample: int = 600
+    #: the quantities :meth:`plot` draws from (``mechderive run --plot`` solves them too)
+    plot_quantities: tuple[str, ...] = ()
 
     # --- the scene schema -------------------------------------------------------------------------
 
@@ -254,6 +256,11 @@ class System:
         from .lagrangian.system import from_lagrangian
 
         return from_lagrangian(lagrangian, coordinates, parameters, name)
+
+    def builtin_scenes(self) -> tuple[tuple[str, str, str], ...]:
+        """The named ready-made scenes of this system, ``(name, one-line description, TOML text)``, that
+        ``mechderive scenes`` lists and ``mechderive run NAME`` runs; none by default."""
+        return ()
 
     def __repr__(self) -> str:
         return f"<system {self.name!r}>"

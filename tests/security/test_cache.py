@@ -88,10 +88,10 @@ def _compile(source: str, target: Path) -> Path:
 
 def _invariants():
     """The heavy top's compiled (E, p_φ, p_ψ) through the disk cache, as the planner obtains it."""
-    from mechderive.scenes import planner
+    from mechderive.systems.heavy_top import system
 
     codecache.clear_memory()
-    return planner._heavy_invariants.__wrapped__()
+    return system._heavy_invariants.__wrapped__()
 
 
 def _answer():
@@ -172,7 +172,7 @@ quantities = ["theta", "energy"]
 @pytest.mark.parametrize("mode", [0o777, 0o775, 0o1777], ids=["world", "group", "sticky"])
 def test_a_root_others_can_write_is_refused_and_the_run_succeeds(cache, tmp_path, mode, caplog, capsys):
     from mechderive.cli import main
-    from mechderive.scenes import planner
+    from mechderive.systems.heavy_top import system as heavy_top
 
     canary = tmp_path / "canary"
     (cache / INVARIANTS).write_text(_canary_py(canary))  # what anybody could have put there
@@ -180,13 +180,13 @@ def test_a_root_others_can_write_is_refused_and_the_run_succeeds(cache, tmp_path
     cache.parent.chmod(mode)
     scene, out = tmp_path / "top.toml", tmp_path / "out.csv"
     scene.write_text(SCENE)
-    planner._heavy_invariants.cache_clear()
+    heavy_top._heavy_invariants.cache_clear()
     codecache.clear_memory()
     try:
         with caplog.at_level(logging.WARNING, logger="mechderive.cache"):
             status = main(["run", str(scene), "-o", str(out)])
     finally:
-        planner._heavy_invariants.cache_clear()
+        heavy_top._heavy_invariants.cache_clear()
     assert status == 0 and not canary.exists()
     energy = np.loadtxt(out, delimiter=",", skiprows=1)[:, 2]
     assert energy == pytest.approx(E_SCENE, rel=1e-12)  # E is a constant of the exact motion; 1e-12 ≫ rounding
