@@ -215,7 +215,7 @@ _READABLE = 40
 
 def _show(x: Any) -> str:
     """``x`` as text; a number without symbols whose exact form is long, to 12 significant digits."""
-    x = sp.sympify(x)
+    x = sp.sympify(x, strict=True)
     text = sp.sstr(x)
     if x.is_Rational and x.q > 1000:  # a decimal made exact
         return f"{float(x):.15g}"
@@ -233,7 +233,7 @@ def _show_matrix(m: sp.Matrix) -> str:
 
 
 def _value_text(x: Any) -> str:
-    x = sp.sympify(x)
+    x = sp.sympify(x, strict=True)
     if x.free_symbols:
         return sp.sstr(x)
     shown = _complex_text(complex(x.evalf(17)))
@@ -319,7 +319,7 @@ def _finite(e: sp.Expr) -> bool:
 
 def _tidy(e: Any) -> sp.Expr:
     """An exact, short form: the trig normal form, factored; numbers kept exact."""
-    e = sp.sympify(e)
+    e = sp.sympify(e, strict=True)
     if e == 0 or e.is_Number:
         return e
     try:
@@ -428,7 +428,7 @@ def _is_zero(c: sp.Expr) -> bool:
     """Whether ``c`` is zero: exactly with symbols; a number below 1e-40 in magnitude (at 50 digits) counts as 0,
     so an exact zero written as e.g. sin²(7/10) + cos²(7/10) − 1 is recognised (use units in which the
     system's numbers are not that small)."""
-    c = sp.sympify(c)
+    c = sp.sympify(c, strict=True)
     if c == 0:
         return True
     if c.free_symbols:
@@ -447,7 +447,7 @@ def _sign_candidates(e: sp.Expr) -> list[sp.Expr]:
 
 def _sign(e: sp.Expr) -> int | None:
     """+1, −1 or 0 for a real expression whose sign is decided (exactly, or at 40 digits for a number), else None."""
-    e = sp.sympify(e)
+    e = sp.sympify(e, strict=True)
     if not e.free_symbols:
         z = complex(e.evalf(_DIGITS))
         return 0 if z.real == 0 else (1 if z.real > 0 else -1)
@@ -561,7 +561,7 @@ def _analyse(poly: sp.Poly) -> _Spectrum:
         else:
             _classify_root(spec, r, mult, exact)
     if numeric_ok:
-        spec.numeric = [complex(sp.sympify(z).evalf(17)) for z in spec.eigenvalues]
+        spec.numeric = [complex(sp.sympify(z, strict=True).evalf(17)) for z in spec.eigenvalues]
     if spec.undecided:
         spec.condition = _coefficient_condition(reduced, even, exact_roots if exact else None)
     return spec
@@ -585,7 +585,7 @@ def _classify_pair(spec: _Spectrum, r: Any, mult: int, exact: bool) -> None:
     if exact and r.free_symbols:
         s = _sign(r)
     else:
-        z = complex(sp.sympify(r).evalf(_DIGITS)) if exact else complex(r)
+        z = complex(sp.sympify(r, strict=True).evalf(_DIGITS)) if exact else complex(r)
         s = (0 if z.real == 0 else (1 if z.real > 0 else -1)) if abs(z.imag) <= _ZERO * abs(z) else None
         if s is None:  # complex r: a quartet ±a ± ib
             import cmath
