@@ -59,14 +59,7 @@ LAYERS: dict[str, int] = {
 
 #: (importing module prefix, imported module) -> why it is allowed for now.  Each is inside a
 #: function body (checked below): the import runs only when that function is called.
-EXCEPTIONS: dict[tuple[str, str], str] = {
-    ("mechderive.systems", "mechderive.scenes.units"):
-        "a system's scale() builds a Scaled (the scene in units of its motion); issue 13 accepts this "
-        "function-level import for now",
-    ("mechderive.systems", "mechderive.scenes.plot"):
-        "a system's plot() draws with the scenes' figure helpers (matplotlib, loaded only to plot); "
-        "to go once those helpers sit below the systems",
-}
+EXCEPTIONS: dict[tuple[str, str], str] = {}
 
 
 def _module_name(path: Path) -> str:

@@ -58,7 +58,7 @@ from ..core.model import derivation_log, derivation_seconds
 from ..errors import InvalidInputError, MechDeriveError
 from ..systems.base import OutOfReach, Solved
 from .schema import Scene, waived
-from .units import Scaled, check_samples, in_scene_units, scale_scene, solving_in
+from ..systems.scaling import Scaled, check_samples, in_scene_units, scale_scene, solving_in
 
 __all__ = ["RunResult", "run_scene"]
 

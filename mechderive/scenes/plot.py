@@ -30,7 +30,7 @@ from ..errors import InvalidInputError, ShapeError
 from ..systems import registry
 from .output import atomic_output, check_output_path
 
-__all__ = ["PLOT_SUFFIXES", "plot_scene", "plot_result", "required_data", "sphere_grid"]
+__all__ = ["PLOT_SUFFIXES", "plot_scene", "plot_result", "required_data"]
 
 PLOT_SUFFIXES = (".png", ".pdf", ".svg")
 
@@ -84,12 +84,6 @@ def _check_data(system: str, data: Mapping[str, Any], needed: tuple[str, ...]) -
             raise ShapeError(f"plot of {system}: expected data {k!r} to be 1-D with the shape of t, {n}, "
                              f"got {a.shape}")
     return arrays
-
-
-def sphere_grid(a: float, b: float, c: float, n: int = 24) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """A wireframe of the ellipsoid with semi-axes a, b, c (the unit sphere for 1, 1, 1)."""
-    lon, lat = np.meshgrid(np.linspace(0, 2 * np.pi, n + 1), np.linspace(0, np.pi, n // 2 + 1))
-    return a * np.sin(lat) * np.cos(lon), b * np.sin(lat) * np.sin(lon), c * np.cos(lat)
 
 
 def _columns_against_t(fig: Any, picture: _Picture) -> None:

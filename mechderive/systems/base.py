@@ -41,7 +41,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from ..core.drift import Drift
     from ..scenes.schema import Scene
-    from ..scenes.units import Scaled
+    from .scaling import Scaled
 
 __all__ = ["Key", "Quantity", "Solved", "OutOfReach", "System", "Derivation", "Derivations"]
 
@@ -53,7 +53,7 @@ class Key:
     ``size`` is 0 for a number, n for a list of n numbers (``omega = [w1, w2, w3]``); ``default``
     is used when the key is absent and ``required`` is False (None: absent stays absent).
     ``scales_as`` says how the key changes when a scene is solved in units of its own motion
-    (:mod:`mechderive.scenes.units`): ``"angle"``, ``"rate"``, ``"moment"``, ``"time"``, or ``""``
+    (:mod:`mechderive.systems.scaling`): ``"angle"``, ``"rate"``, ``"moment"``, ``"time"``, or ``""``
     (not scaled).
     """
 
@@ -187,7 +187,7 @@ class System:
 
     def scale(self, scene: "Scene") -> "Scaled":
         """The scene in units of its own motion (exact powers of two); the default keeps the scene's units."""
-        from ..scenes.units import Scaled
+        from .scaling import Scaled
 
         return Scaled(scene, scene)
 

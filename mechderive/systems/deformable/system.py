@@ -25,7 +25,7 @@ from ..scene_keys import at, check_keys, number, rename_keys
 if TYPE_CHECKING:  # pragma: no cover
     from ...core.drift import Drift
     from ...scenes.schema import Scene
-    from ...scenes.units import Scaled
+    from ..scaling import Scaled
 
 __all__ = ["FallingCat", "SYSTEM", "FALLING_CAT_PARAMETERS"]
 
@@ -68,7 +68,7 @@ def _name_keys(exc: MechDeriveError, names: tuple[str, ...]) -> MechDeriveError:
 
 
 def _integrate(scene: "Scene", t: np.ndarray) -> Solved:
-    from ...scenes.units import units_of
+    from ..scaling import units_of
     from .cat import cat_columns, falling_cat
 
     scaled = units_of(scene)
@@ -92,7 +92,7 @@ def _units(scene: "Scene") -> "Scaled":
     """The units of the motion: the connection (3.87) depends on ratios of the masses and of the lengths
     only, and the orientation after a shape change on the fraction of the loop done (3.98), so the
     masses, lengths and duration are units as well."""
-    from ...scenes import units as u
+    from .. import scaling as u
     from .cat import BODY_PARAMETERS, DEFAULTS
 
     given = scene.parameters

@@ -28,7 +28,7 @@ from ..scene_keys import SCENE_STRICT_HINT, at, check_keys, number, number_list,
 if TYPE_CHECKING:  # pragma: no cover
     from ...core.drift import Drift
     from ...scenes.schema import Scene
-    from ...scenes.units import Scaled
+    from ..scaling import Scaled
 
 __all__ = ["FreeTop", "SYSTEM"]
 
@@ -56,7 +56,7 @@ _QUANTITIES = (
     *(Quantity(f"q{i}", "1", f"unit quaternion of R, component q{i}") for i in range(4)),
 )
 
-#: How each scaled output grows with the units, for the messages of :func:`mechderive.scenes.units.refuse_overflow`.
+#: How each scaled output grows with the units, for the messages of :func:`mechderive.systems.scaling.refuse_overflow`.
 _SCALES_AS = {**{f"omega{a}": "the rates" for a in (1, 2, 3)},
               "energy": "I ω² (moments times rates squared, and M g l)", "L_norm": "I ω (moments times rates)",
               **{f"L{a}": "I ω (moments times rates; the cat's: mass · length² / t_end)" for a in (1, 2, 3)}}
@@ -135,7 +135,7 @@ _ESTIMATES = {"omega": "omega_error_estimate", "rotation": "rotation_error_estim
 
 
 def _exact(scene: "Scene", t: np.ndarray) -> Solved:
-    from ...scenes.units import units_of
+    from ..scaling import units_of
     from .exact import MAX_TRACKING_POINTS, TRACKING_STEP, exact_free_top
 
     scaled = units_of(scene)
@@ -196,7 +196,7 @@ def _rate_bound(moments: tuple, w0: np.ndarray) -> float:
 
 
 def _integrate(scene: "Scene", t: np.ndarray) -> Solved:
-    from ...scenes.units import check_integration_length, units_of
+    from ..scaling import check_integration_length, units_of
     from ...solvers.driver import integrate_to_rtol
     from .integrate import integrate_free_top
 
@@ -223,7 +223,7 @@ def _integrate(scene: "Scene", t: np.ndarray) -> Solved:
 def _units(scene: "Scene") -> "Scaled":
     """The units of the motion: Euler's equations (3.33) are homogeneous in the moments and, with
     t → t/c, ω → c ω, in time."""
-    from ...scenes import units as u
+    from .. import scaling as u
 
     p, s = scene.parameters, scene.initial
     I = (p["I1"], p["I2"], p["I3"])
@@ -376,7 +376,7 @@ class FreeTop(System):
             return rigid_body_violations(parameters["I1"], parameters["I2"], parameters["I3"])
 
     def scale(self, scene: "Scene") -> "Scaled":
-        from ...scenes.units import check_outputs
+        from ..scaling import check_outputs
 
         scaled = _units(scene)
         if not scaled.identity:
@@ -422,7 +422,7 @@ class FreeTop(System):
         """Left, the polhode (3.4.4): ω(t) on the inertia ellipsoid I1 ω1² + I2 ω2² + I3 ω3² = 2T (3.46),
         drawn as a wireframe with semi-axes √(2T / I_a), T the mean over the samples (constant for the
         exact motion); right, ω1, ω2, ω3 against t."""
-        from ...scenes.plot import sphere_grid
+        from ..figures import sphere_grid
 
         moments = _moments_for_plot(result)
         d = result.columns

@@ -28,7 +28,7 @@ from . import parameters as heavy_top_parameters
 if TYPE_CHECKING:  # pragma: no cover
     from ...core.drift import Drift
     from ...scenes.schema import Scene
-    from ...scenes.units import Scaled
+    from ..scaling import Scaled
 
 __all__ = ["HeavyTop", "SYSTEM"]
 
@@ -69,7 +69,7 @@ _QUANTITIES = (
     *(Quantity(f"apex_{c}", "1", f"{c} component (space) of the symmetry axis e3, a unit vector") for c in "xyz"),
 )
 
-#: How each scaled output grows with the units, for the messages of :func:`mechderive.scenes.units.refuse_overflow`.
+#: How each scaled output grows with the units, for the messages of :func:`mechderive.systems.scaling.refuse_overflow`.
 _SCALES_AS = {**{q: "the rates" for q in ("theta_dot", "phi_dot", "psi_dot", "omega1", "omega2", "omega3")},
               "energy": "I ω² (moments times rates squared, and M g l)", "p_phi": "I ω (moments times rates)",
               "p_psi": "I ω (moments times rates)"}
@@ -207,7 +207,7 @@ def _estimate(top: Any, t: np.ndarray, names: list[str], scaled: "Scaled") -> fl
 
 
 def _exact(scene: "Scene", t: np.ndarray) -> Solved:
-    from ...scenes.units import keys_text, units_of
+    from ..scaling import keys_text, units_of
     from .exact import exact_heavy_top
 
     scaled = units_of(scene)
@@ -262,7 +262,7 @@ def _rate_bound(scene: "Scene") -> float:
 
 def _integrate(scene: "Scene", t: np.ndarray) -> Solved:
     from ...kinematics.rotations import euler_rates
-    from ...scenes.units import check_integration_length, units_of
+    from ..scaling import check_integration_length, units_of
     from ...solvers.driver import integrate_to_rtol
     from .integrate import integrate_heavy_top
 
@@ -320,7 +320,7 @@ _LARGEST_ANGLE = 4 * math.pi
 def _reduced_angles(scene: "Scene", scaled: "Scaled") -> "Scaled":
     """``scaled`` with a large initial φ or ψ reduced mod 2π (the motion does not depend on them: both are
     cyclic (3.63)-(3.64)); the turns taken off are added back to the output columns of φ and ψ."""
-    from ...scenes.units import reduce_angle
+    from ..scaling import reduce_angle
 
     big = {k: scene.initial[k] for k in ("phi", "psi") if abs(scene.initial[k]) > _LARGEST_ANGLE}
     if not big:
@@ -337,7 +337,7 @@ def _units(scene: "Scene") -> "Scaled":
     - M g l cos θ, is multiplied by a constant when I1, I3 and M g l are (the motion is unchanged), and a
     change of the time unit t → t/c multiplies the rates by c and leaves the motion the same if M g l is
     multiplied by c²."""
-    from ...scenes import units as u
+    from .. import scaling as u
 
     p, s = scene.parameters, scene.initial
     I1, I3 = p["I1"], p["I3"]
@@ -577,7 +577,7 @@ class HeavyTop(System):
             return heavy_top_parameters.rigid_body_violations(parameters)
 
     def scale(self, scene: "Scene") -> "Scaled":
-        from ...scenes.units import check_outputs
+        from ..scaling import check_outputs
 
         scaled = _reduced_angles(scene, _units(scene))
         if not scaled.identity:
@@ -634,7 +634,7 @@ class HeavyTop(System):
     def plot(self, result: Any, figure: Any) -> bool:
         """Left, the path of the apex e3 on the unit sphere (3-D, over a faint wireframe sphere; the
         chapter's figure 44); right, θ(t)."""
-        from ...scenes.plot import sphere_grid
+        from ..figures import sphere_grid
 
         d = result.columns
         figure.set_size_inches(11.5, 5.0)

@@ -35,7 +35,7 @@ __all__ = ["Body", "Motion", "integrate_body", "free_closed_form", "heavy_closed
            "columns", "drifts", "invariants", "conserved_axial", "MAX_INTEGRATED_RADIANS"]
 
 #: An integration may follow at most this many radians of the motion's fastest rate (as the planner's
-#: :data:`mechderive.scenes.units.MAX_INTEGRATED_RADIANS`): beyond, a run takes minutes.
+#: :data:`mechderive.systems.scaling.MAX_INTEGRATED_RADIANS`): beyond, a run takes minutes.
 MAX_INTEGRATED_RADIANS = 2.0**18
 
 

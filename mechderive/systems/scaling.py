@@ -35,12 +35,14 @@ import contextlib
 import contextvars
 import math
 from dataclasses import dataclass, field
-from typing import Iterator
+from typing import TYPE_CHECKING, Iterator
 
 import numpy as np
 
 from ..errors import InvalidInputError
-from .schema import Scene
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..scenes.schema import Scene
 
 __all__ = ["Scaled", "scale_scene", "check_samples", "check_outputs", "check_integration_length", "in_scene_units",
            "keys_text", "units_of", "solving_in", "exponent", "exact_ldexp", "moment_exponent", "comfortable",
