@@ -94,7 +94,8 @@ def _linearization(args: argparse.Namespace, target, scene_parameters: dict) -> 
     if args.format not in ("text", "latex", "json"):
         raise InvalidInputError(f"derive linearization: expected --format text, latex or json, got {args.format!r}")
     system = registry.get(target) if isinstance(target, str) else target
-    _, summary, lin = linearization_derivation(system, args.at, scene_parameters or None)
+    values = system.parameter_values(scene_parameters) if args.parameters and scene_parameters else None
+    _, summary, lin = linearization_derivation(system, args.at, values)
     if args.format == "text":
         sys.stdout.write(summary.rstrip("\n") + "\n")
     elif args.format == "latex":

@@ -220,6 +220,11 @@ class System:
 
         return from_lagrangian_model(self.name, self.summary, *model)
 
+    def parameter_values(self, parameters: Mapping[str, Any]) -> dict[str, float]:
+        """A scene's checked ``[parameters]`` as {symbol name: number} for the derived equations: the
+        numbers as they are; a system whose scene keys are lists (``center_of_mass``) names their entries."""
+        return {k: v for k, v in parameters.items() if isinstance(v, (int, float)) and not isinstance(v, bool)}
+
     def lagrangian_model(self) -> tuple | None:
         """(L, coordinates, velocities, parameter symbols) for :mod:`mechderive.core.linearize`, or None.
 

@@ -140,6 +140,21 @@ class RigidBodyModel(SymbolicModel):
         """Body components of the gravity torque in q: τ_generic with R = R(q)."""
         return self.in_quaternion(self.torque_generic)
 
+    @derived
+    def vertical_rate_generic(self) -> sp.Matrix:
+        """γ̇ for γ = (R13, R23, R33), the body components of ẽ3: γ̇ = γ × ω (Poisson's equation).
+
+        Derived, not assumed: the rate of R(q)'s third column along q̇ = ½ q ⊗ (0, ω) is compared with
+        γ × ω in q, and the derivation raises unless they agree identically.
+        """
+        R = rotation_symbols()
+        gamma = sp.Matrix([R[a, 2] for a in range(3)])
+        candidate = gamma.cross(sp.Matrix(omega_symbols()))
+        q, rate = quaternion_symbols(), self.quaternion_rhs
+        from_q = sp.Matrix([sum(self.vertical_body[a].diff(s) * r for s, r in zip(q, rate)) for a in range(3)])
+        _expect_zero([sp.cancel(e) for e in from_q - self.in_quaternion(candidate)], "dγ/dt(q) − γ × ω")
+        return candidate
+
     # --- equations of motion -----------------------------------------------------------------
 
     @derived

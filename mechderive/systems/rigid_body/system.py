@@ -302,6 +302,58 @@ class RigidBody(System):
 
     # --- derive, check -------------------------------------------------------------------------
 
+    def parameter_values(self, parameters: Mapping[str, Any]) -> dict[str, float]:
+        """I1 I2 I3 M g, and c1 c2 c3 from ``center_of_mass``."""
+        values = super().parameter_values(parameters)
+        values.update({f"c{a + 1}": float(x) for a, x in enumerate(parameters.get("center_of_mass", ()))})
+        return values
+
+    def first_order_model(self) -> tuple | None:
+        """Euler–Poisson equations in (ω, γ), γ = (R13, R23, R33) the body components of the vertical:
+        ω̇ from Euler's equations with the gravity torque (which depends on γ only), γ̇ = γ × ω (derived in
+        :attr:`~.model.RigidBodyModel.vertical_rate_generic`).  None with an applied torque (it may
+        depend on t and the whole of R)."""
+        if self.torque is not None:
+            return None
+        from . import model as rm
+
+        m = rm.model()
+        R = rm.rotation_symbols()
+        state = (*rm.omega_symbols(), R[0, 2], R[1, 2], R[2, 2])
+        free = {tau: 0 for tau in rm.tau_symbols}
+        rhs = (*m.euler_rhs_generic.subs(free), *m.vertical_rate_generic)
+        return rhs, state, rm.parameters()
+
+    def check_system(self) -> Any:
+        """The symbols of ``mechderive check``: ω1..3 and R13, R23, R33 (the state of the Euler–Poisson
+        equations, :meth:`first_order_model`), their rates on a motion, the parameters, ``energy`` and
+        ``L_vertical``; None with an applied torque."""
+        model = self.first_order_model()
+        if model is None:
+            return None
+        import sympy as sp
+
+        from ...core import check_system as cs
+        from ...core.symbols import state_symbol
+        from . import model as rm
+
+        rhs, state, params = model
+        names = tuple(x.name for x in state)
+        meaning = {"omega1": "body component ω1 of the angular velocity", "omega2": "ω2", "omega3": "ω3",
+                   "R13": "R13 = e1·ẽ3, body component of the upward vertical", "R23": "R23 = e2·ẽ3",
+                   "R33": "R33 = e3·ẽ3 = cos θ"}
+        qs = [cs.Quantity(n, x, "state", meaning[n]) for n, x in zip(names, state)]
+        qs += [cs.Quantity(n + "_dot", state_symbol(n + "_dot"), "derivative", f"rate of {n} (fixed on a motion)")
+               for n in names]
+        qs += [cs.Quantity(p.name, p, "parameter", "a parameter of the body") for p in params]
+        qs += [cs.Quantity("energy", sp.Symbol("energy", real=True), "defined", "E = ½ Σ I_a ω_a² + M g Σ c_a R_a3",
+                           lambda s: rm.model().energy_generic),
+               cs.Quantity("L_vertical", sp.Symbol("L_vertical", real=True), "defined", "L·ẽ3 = Σ I_a ω_a R_a3",
+                           lambda s: rm.model().vertical_momentum_generic)]
+        return cs.System(name=self.name, summary=self.summary, coordinates=names, order=1,
+                         highest=lambda: {state_symbol(n + "_dot"): r for n, r in zip(names, rhs)},
+                         quantities=qs, domain={}, motion="Euler's equations with the gravity torque, γ̇ = γ × ω")
+
     def derivations(self) -> tuple[Derivation, ...]:
         """Euler's equations with the gravity torque (and the applied one), V, τ_gravity, E and L·ẽ3."""
         torque = self.torque
