@@ -226,6 +226,36 @@ register(Claim(
 ))
 
 
+def _check_3_45_generic(f) -> Outcome:
+    # The generic linearization (mechderive.core.linearize) of Euler's equations about ω = (Ω, 0, 0):
+    # det(λ − J) = λ(λ² + ω²); the printed condition must hold exactly where ω² < 0 (a growing mode),
+    # on all 27 assignments of 1, 2, 3 (ω² = 0, equal moments, is marginal: neither).
+    from ..core.linearize import linearize_first_order
+
+    lin = linearize_first_order(_m().free_rhs, (w1, w2, w3), {w1: Omega, w2: 0, w3: 0})
+    if len(lin.squared_frequencies) != 1:
+        return Outcome(False, f"expected one oscillation pair, got ω² = {lin.squared_frequencies}")
+    (w_sq,) = lin.squared_frequencies
+    for values in itertools.product((1, 2, 3), repeat=3):
+        point = dict(zip((I1, I2, I3), values))
+        grows = bool(w_sq.subs(point).subs(Omega, 1) < 0)
+        if grows != bool(f.subs(point)):
+            return Outcome(False, f"at (I1, I2, I3) = {values}: ω² = {w_sq.subs(point)} Ω², the condition says "
+                                  f"{bool(f.subs(point))}")
+    return Outcome(True, f"ω² = {w_sq} from the generic linearization: negative exactly where the condition "
+                         "holds, on all 27 assignments of 1, 2, 3")
+
+
+register(Claim(
+    "3.45 generic", "3.4.3",
+    "spin about e1 is unstable iff I2 < I1 < I3 or I3 < I1 < I2 — from the generic linearization of (3.33)",
+    "symbolic",
+    printed=lambda: sp.Or(sp.And(I2 < I1, I1 < I3), sp.And(I3 < I1, I1 < I2)),
+    check=_check_3_45_generic,
+    perturbed=lambda: sp.And(I2 < I1, I1 < I3),
+))
+
+
 def _check_axes(f) -> Outcome:
     from ..systems.free_top.stability import principal_axis_stability
 

@@ -639,6 +639,33 @@ register(Claim(
     check=_check_sleeping_integration,
 ))
 
+def _check_3_83_generic(f) -> Outcome:
+    """The generic linearization (Routh-reduced, :mod:`mechderive.core.linearize`) of the Lagrangian (3.62)
+    about the sleeping top θ = 0, φ̇ = 0, ψ̇ = ω3: its nutation ω² must vanish exactly at the printed ω3²
+    and be positive above it (twice the printed value) and negative below (half)."""
+    from ..core.linearize import linearize_lagrangian
+
+    m = _m()
+    lin = linearize_lagrangian(m.state_lagrangian, (ht.phi, ht.theta, ht.psi),
+                               (ht.phi_dot, ht.theta_dot, ht.psi_dot), {ht.theta: 0, ht.phi_dot: 0, ht.psi_dot: omega3})
+    if len(lin.squared_frequencies) != 1:
+        return Outcome(False, f"expected one nutation mode, got ω² = {lin.squared_frequencies}")
+    (w_sq,) = lin.squared_frequencies
+    at = {k: sp.simplify(w_sq.subs(omega3, sp.sqrt(k * f))) for k in (sp.Rational(1, 2), 1, 2)}
+    ok = at[1] == 0 and bool(sp.simplify(at[2]).is_positive) and bool(sp.simplify(at[sp.Rational(1, 2)]).is_negative)
+    return Outcome(ok, f"ω² = {sp.factor(w_sq)}: 0 at the printed ω3², {sp.factor(at[2])} at twice it, "
+                       f"{sp.factor(at[sp.Rational(1, 2)])} at half")
+
+
+register(Claim(
+    "3.83 generic", SECTION_63,
+    "the sleeping top is stable iff ω3² > 4I1Mgl/I3² — from the generic linearization of L (3.62) at θ = 0",
+    "symbolic",
+    printed=lambda: 4 * I1 * M * g * l / I3**2,
+    check=_check_3_83_generic,
+    perturbed=lambda: 2 * I1 * M * g * l / I3**2,
+))
+
 register(Claim(
     "3.83 friction", SECTION_63,
     "the top starts to fall when friction has slowed it to I3ω3 = 2√(I1Mgl)",
