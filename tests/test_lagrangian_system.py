@@ -239,8 +239,8 @@ REFUSED = [
     ("twice the same coordinate", _scene(coords='["theta", "theta"]'),
      r"^scene key coordinates: expected distinct coordinates, got 'theta' twice"),
     ("no coordinates", _scene(coords="[]"), r"^scene key coordinates: expected at least one coordinate"),
-    ("too many coordinates", _scene(coords=str([f"q{i}" for i in range(7)]).replace("'", '"')),
-     r"^scene key coordinates: expected at most 6 coordinates .* got 7"),
+    ("too many coordinates", _scene(coords=str([f"q{i}" for i in range(9)]).replace("'", '"')),
+     r"^scene key coordinates: expected at most 8 coordinates .* got 9"),
     ("symbolically singular mass matrix", _scene(lagrangian="(theta_dot + phi_dot)**2/2 - theta**2 - phi**2",
                                                  parameters=""),
      r"^scene key lagrangian: expected a regular Lagrangian .* got a singular mass matrix: det .* ≡ 0 "

@@ -105,6 +105,11 @@ def argument_order(exprs: Any) -> list[sp.Symbol]:
     free: set[sp.Symbol] = set()
     for e in items:
         free |= set(_checked(e, "each expression").free_symbols)
+    return _ordered(free)
+
+
+def _ordered(free: set) -> list[sp.Symbol]:
+    """Symbols in the order of :data:`ARGUMENTS`, then by name."""
     rank = {n: i for i, n in enumerate(ARGUMENTS)}
     return sorted(free, key=lambda s: (rank.get(s.name, len(rank)), s.name))
 
@@ -146,14 +151,16 @@ def _argument_lines(args: Sequence[sp.Symbol], names: Mapping[sp.Symbol, str], p
     return out
 
 
-def _check_args(flat: Sequence[sp.Expr], args: Sequence[Any]) -> list[sp.Symbol]:
+def _check_args(flat: Sequence[sp.Expr] | set, args: Sequence[Any]) -> list[sp.Symbol]:
+    """``args`` checked: distinct symbols including every free symbol of ``flat`` (expressions, or their
+    free symbols as a set)."""
     args = list(args)
     for a in args:
         if not isinstance(a, sp.Symbol):
             raise InvalidInputError(f"expected the arguments to be SymPy symbols, got {a!r}")
     if len(set(args)) != len(args):
         raise InvalidInputError(f"expected distinct arguments, got {[str(a) for a in args]}")
-    free = set().union(*(e.free_symbols for e in flat)) if flat else set()
+    free = flat if isinstance(flat, set) else set().union(*(e.free_symbols for e in flat)) if flat else set()
     missing = sorted(str(s) for s in free - set(args))
     if missing:
         raise InvalidInputError(f"expected the arguments to include every free symbol, got {', '.join(missing)} missing")
@@ -248,13 +255,30 @@ def to_c_source(exprs: Any, args: Sequence[Any] | None = None, name: str = "f", 
     Needs ``<math.h>`` (included unless ``include=False``) and ``-lm``.
     """
     flat, shape = _flat(exprs)
-    _check_printable(flat)
-    args = _check_args(flat, argument_order(exprs) if args is None else args)
     if not name.isidentifier() or name in _C_RESERVED:
         raise InvalidInputError(f"expected a C identifier for the function name, got {name!r}")
+    # cse first: a derived expression may be a DAG whose tree is exponentially larger (the eliminated
+    # accelerations of a many-coordinate Lagrangian); cse visits each distinct node once, and every
+    # later check and renaming walks only its small pieces.
+    temporaries = sp.numbered_symbols("cse_", cls=sp.Dummy)
+    repl, reduced = sp.cse(flat, symbols=temporaries)
+    pieces = [e for _, e in repl] + list(reduced)
+    _check_printable(pieces)
+    made = {s for s, _ in repl}
+    free = set().union(*(e.free_symbols for e in pieces)) - made if pieces else set()
+    args = _check_args(free, _ordered(free) if args is None else args)
     names = _identifiers(args, _C_RESERVED | {name})
     plain = {a: sp.Symbol(names[a]) for a in args}
-    repl, reduced = sp.cse([e.xreplace(plain) for e in flat], symbols=sp.numbered_symbols("cse_"))
+    taken = set(names.values())
+    cse_names = {}
+    for k, (s, _) in enumerate(repl):
+        label = f"cse_{k}"
+        while label in taken:
+            label += "_"
+        cse_names[s] = sp.Symbol(label)
+    plain.update(cse_names)
+    repl = [(cse_names[s], e.xreplace(plain)) for s, e in repl]
+    reduced = [e.xreplace(plain) for e in reduced]
     layout = " x ".join(map(str, shape)) if shape else "scalar"
     comment = ["/*"]
     comment += [f" * {_inert(line)}".rstrip() for line in doc.strip().splitlines()] if doc else []

@@ -31,10 +31,11 @@ from ...formulas.parse import FUNCTIONS, dt, parse_expression
 
 __all__ = ["Definition", "parse_definition", "from_objects", "MAX_COORDINATES", "MAX_EXPRESSIONS", "RESERVED"]
 
-#: Most coordinates a definition may have.  The compiled elimination is generated as expressions, whose
-#: printing to C walks them as trees: 2 s to build for a 6-link chain, 26 s for 7 (measured), so more
-#: coordinates wait for a DAG-aware printer (see the package's notes).
-MAX_COORDINATES = 6
+#: Most coordinates a definition may have.  The compiled elimination grows fast with them: a chain of n
+#: planar links builds (derive + generate + compile C, cold) in 2.1 s for n = 6, 3.7 s for 7, 14 s for 8
+#: (measured; the C printer is cse-first, so the DAG is never walked as a tree), beyond which the C
+#: compiler's time on the generated file dominates.  (A Lagrangian's text is also bounded, 2000 chars.)
+MAX_COORDINATES = 8
 #: Most output expressions.
 MAX_EXPRESSIONS = 50
 #: Names that are neither coordinates nor parameters: the parser's functions and constants, and time.
