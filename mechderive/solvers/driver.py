@@ -94,9 +94,9 @@ class Term:
     inertia: Callable[[Sequence[Any]], Any] | None = None
     passage_note: str = PASSAGE_NOTE
 
-    def rhs(self) -> Callable[..., list]:
-        """f compiled to NumPy, called as f(*y, *p)."""
-        return _lambdified(self, "rhs", "numpy")
+    def rhs(self, module: str = "numpy") -> Callable[..., list]:
+        """f compiled for ``module`` ("numpy", or "math": Python floats), called as f(*y, *p)."""
+        return _lambdified(self, "rhs", module)
 
     def invariant_function(self) -> Callable[..., list] | None:
         """g(*p, *y) -> list of the invariants, or None when the term has none."""
@@ -369,14 +369,20 @@ def integrate(term: Term, y0: Sequence[float], t: Sequence[float], params: Seque
     ``method="splitting"`` (the term's ``splitting``; state (ω, q)): ``step`` (required; each output
     interval is cut into ceil(Δt/step) equal steps), ``order`` 2, 4 (default) or 6, ``backend``
     "auto", "c" (the compiled stage loop) or "python".
-    ``estimate_error``: measure the global error by a second run (DOP853: at rtol/1000; the
-    splitting: at step/2, Richardson).  ``track = (σ0, δ0)`` follows the half-angles of the term's
+    ``estimate_error``: measure the global error by a second run: DOP853 — the distance to a rerun at
+    rtol/1000, atol/1000, × 1/(1 - √r) for the ratio r of the tolerances
+    (:func:`~.dop853.reference_tolerance`: the rerun's rtol is floored at 2.3e-14, SciPy's limit;
+    below 2.3e-13 it runs looser, at 10·rtol, and the figure is an upper bound ~10× the error);
+    splitting — Richardson with the known order p, |y_h - y_(h/2)| · 2^p / (2^p - 1) · 1.25 (the
+    rerun, at step/2, costs twice the main run).  With a quaternion the estimate is split into ω,
+    R (and q) and the Euler angles (:func:`~.half_angles.output_error_estimates`).  ``track = (σ0, δ0)`` follows the half-angles of the term's
     quaternion (it must have one; the splitting always tracks, from the arguments of q0 where not
     given); ``euler_rates = (φ̇0, ψ̇0)`` splits φ ± ψ between φ and ψ on a motion staying exactly at
     θ = 0 or π (:func:`~.half_angles.sleeping_split`).  ``parameters_at(t, y)``: the parameter values
     computed in Python at every evaluation (an applied torque given as a Python function; DOP853 on
-    SciPy only).  ``max_steps``: steps allowed to each run (default
-    :data:`~.limits.MAX_STEPS`).  Raises :class:`~mechderive.errors.IntegrationError` when the run
+    SciPy only).  ``max_steps``: steps allowed to each run (default :data:`~.limits.MAX_STEPS` = 10⁷):
+    DOP853 stops there with an error saying where it got to; the splitting, whose steps are known
+    in advance, refuses at once.  Raises :class:`~mechderive.errors.IntegrationError` when the run
     cannot reach ``t[-1]``.
     """
     t = np.asarray(t, dtype=float)
@@ -416,7 +422,7 @@ def _run_dop853(term: Term, t: np.ndarray, y0: np.ndarray, par: tuple, rtol: flo
         raise unavailable_error(term.name, "scipy")
     fun = None
     if compiled is None:
-        rhs = _lambdified(term, "rhs", term.rhs_module)
+        rhs = term.rhs(term.rhs_module)
         if parameters_at is None:
             def fun(_t: float, y: np.ndarray) -> list:
                 return rhs(*y.tolist(), *par)

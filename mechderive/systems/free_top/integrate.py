@@ -51,7 +51,6 @@ Units: any consistent set (kg m², rad/s, s, N m).
 
 from __future__ import annotations
 
-import functools
 from dataclasses import dataclass
 from typing import Any, Callable, Sequence
 
@@ -79,11 +78,10 @@ Torque = Callable[[float, np.ndarray, np.ndarray], Any]
 class FreeTopTrajectory(Trajectory):
     """One integrated motion.
 
-    Attributes
+    Attributes (those of :class:`~mechderive.solvers.driver.Trajectory`: ``t`` (N,) times (s),
+    ``omega`` (N, 3) body components of ω (rad/s), ``quaternion`` (N, 4) of A = Rᵀ, scalar first,
+    projected onto |q| = 1, ``y`` the state as integrated, ``invariants``, ...; and)
     ----------
-    t : (N,) times (s); ``t[0]`` is the initial time.
-    omega : (N, 3) body components of ω (rad/s).
-    quaternion : (N, 4) unit quaternion of A = Rᵀ, scalar first (projected onto |q| = 1).
     euler_angles : (N, 3) Euler angles (φ, θ, ψ) (3.54) with R(φ, θ, ψ) = R, φ and ψ continuous, their
         turns counted along every step of the integrator, not unwrapped from the samples
         (:mod:`~mechderive.solvers.half_angles`; as for the heavy top,
@@ -178,13 +176,9 @@ TERM = Term("free_top", _state_exprs, invariants=_invariant_exprs, invariant_nam
             quaternion=3, rhs_module="math", splitting="lie_poisson", inertia=_inertia)
 
 
-@functools.cache
 def _state_rhs() -> Callable[..., list]:
-    """(ω̇, q̇) as one compiled scalar function of (ω1..3, q0..3, I1..3, τ1..3)."""
-    from ...core.compile import compile_scalar
-
-    exprs, state, par = _state_exprs()
-    return compile_scalar(exprs, [*state, *par], name="free_top_state_rhs")
+    """(ω̇, q̇) as the scalar function SciPy's stepper calls, of (ω1..3, q0..3, I1..3, τ1..3)."""
+    return TERM.rhs("math")
 
 
 def _compiled_dop853() -> Any:
@@ -243,18 +237,11 @@ def integrate_free_top(I: Sequence[float], omega0: Sequence[float], t_eval: Sequ
         since it calls back into Python).
     backend : DOP853 only: ``"auto"``, ``"c"`` (raises :class:`IntegrationError` without a C
         compiler, or with a torque) or ``"scipy"``.
-    estimate_error : estimate the error of every output — ω (rad/s), R and q, the Euler angles
-        (rad) — by one extra run: ``omega_error_estimate``, ``rotation_error_estimate``,
-        ``euler_angle_error_estimate`` and their maximum ``error_estimate``, the recipe in
-        ``error_estimate_kind`` (:func:`~mechderive.solvers.half_angles.output_error_estimates`):
-        DOP853 — the distance to a rerun at rtol/1000, atol/1000, × 1/(1 - √r) for the ratio r of
-        the tolerances (:func:`~mechderive.solvers.dop853.reference_tolerance`: the rerun's rtol
-        is floored at 2.3e-14, SciPy's limit; below 2.3e-13 it runs looser, at 10·rtol, and the
-        figure is an upper bound ~10× the error); splitting — Richardson with the known order p,
-        |y_h - y_(h/2)| · 2^p / (2^p - 1) · 1.25 (the rerun costs twice the main run).
-    max_steps : steps allowed to each run (default :data:`~mechderive.solvers.limits.MAX_STEPS` = 10⁷):
-        DOP853 stops there with an :class:`IntegrationError` saying where it got to; the splitting,
-        whose steps are known in advance, refuses at once.
+    estimate_error : estimate the error of every output by one extra run — ``omega_error_estimate``
+        (rad/s), ``rotation_error_estimate`` (R and q, rad), ``euler_angle_error_estimate`` (rad) and
+        their maximum ``error_estimate``, the recipe in ``error_estimate_kind`` (as
+        :func:`mechderive.solvers.driver.integrate` says: a rerun at rtol/1000, or Richardson).
+    max_steps : steps allowed to each run (default 10⁷, :func:`mechderive.solvers.driver.integrate`).
 
     Raises :class:`~mechderive.errors.UnphysicalInertiaError`, :class:`~mechderive.errors.ShapeError`,
     :class:`~mechderive.errors.InvalidInputError` on bad input, :class:`IntegrationError` when a run

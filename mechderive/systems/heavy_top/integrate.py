@@ -95,11 +95,10 @@ __all__ = ["integrate_heavy_top", "integrate_heavy_top_ensemble", "HeavyTopTraje
 class HeavyTopTrajectory(Trajectory):
     """One integrated motion of the heavy symmetric top.
 
-    Attributes
+    Attributes (those of :class:`~mechderive.solvers.driver.Trajectory`: ``t`` (N,) times (s),
+    ``omega`` (N, 3) body components of ω (rad/s), ``quaternion`` (N, 4) of A = Rᵀ, scalar first,
+    projected onto |q| = 1, ``y`` the state as integrated, ``invariants``, ...; and)
     ----------
-    t : (N,) times (s); ``t[0]`` is the initial time.
-    omega : (N, 3) body components of ω (rad/s).
-    quaternion : (N, 4) unit quaternion of A = Rᵀ, scalar first (projected onto |q| = 1).
     euler_angles : (N, 3) Euler angles (φ, θ, ψ) (3.54) with R(φ, θ, ψ) = R: θ = 2 atan2(√(q1² + q2²),
         √(q0² + q3²)) ∈ [0, π]; φ and ψ continuous, their turns counted along every step of the
         integrator — refined with its dense output where needed — not unwrapped from the samples
@@ -219,13 +218,9 @@ TERM = Term("heavy_top", _build, invariants=_invariant_exprs, invariant_names=("
                          "turns of φ and ψ are then not determined (2π each time; φ ± ψ and R are)")
 
 
-@functools.cache
 def _rhs() -> Callable[..., list]:
-    """(ω̇, q̇) as one compiled scalar function of (ω1..3, q0..3, I1, I3, M, g, l)."""
-    from ...core.compile import compile_scalar
-
-    state, _, par = _symbols()
-    return compile_scalar(_rhs_exprs(), [*state, *par], name="heavy_top_rhs")
+    """(ω̇, q̇) as the scalar function SciPy's stepper calls, of (ω1..3, q0..3, I1, I3, M, g, l)."""
+    return TERM.rhs("math")
 
 
 def _compiled_dop853() -> Any:
@@ -321,18 +316,11 @@ def integrate_heavy_top(params: Mapping[str, float], initial: Mapping[str, float
     backend : ``"auto"`` (compiled C where a C compiler is found), ``"c"`` (raises
         :class:`IntegrationError` without a compiler), or the uncompiled path: ``"scipy"``
         (DOP853) / ``"python"`` (the splitting's stage loop in Python).
-    estimate_error : estimate the error of every output — ω (rad/s), R and q, the Euler angles
-        (rad) — by one extra run: ``omega_error_estimate``, ``rotation_error_estimate``,
-        ``euler_angle_error_estimate`` and their maximum ``angle_error_estimate``, the recipe in
-        ``error_estimate_kind`` (:func:`~mechderive.solvers.half_angles.output_error_estimates`):
-        DOP853 — the distance to a rerun at rtol/1000, atol/1000, × 1/(1 - √r) for the ratio r of
-        the tolerances (:func:`~mechderive.solvers.dop853.reference_tolerance`: the rerun's rtol
-        is floored at 2.3e-14, SciPy's limit; below 2.3e-13 it runs looser, at 10·rtol, and the
-        figure is an upper bound ~10× the error); splitting — Richardson with the known order p,
-        |y_h - y_(h/2)| · 2^p / (2^p - 1) · 1.25 (the rerun costs twice the main run).
-    max_steps : steps allowed to each run (default :data:`~mechderive.solvers.limits.MAX_STEPS` = 10⁷):
-        DOP853 stops there with an :class:`IntegrationError` saying where it got to; the splitting,
-        whose steps are known in advance, refuses at once.
+    estimate_error : estimate the error of every output by one extra run — ``omega_error_estimate``
+        (rad/s), ``rotation_error_estimate`` (R and q, rad), ``euler_angle_error_estimate`` (rad) and
+        their maximum ``angle_error_estimate``, the recipe in ``error_estimate_kind`` (as
+        :func:`mechderive.solvers.driver.integrate` says: a rerun at rtol/1000, or Richardson).
+    max_steps : steps allowed to each run (default 10⁷, :func:`mechderive.solvers.driver.integrate`).
 
     Raises :class:`~mechderive.errors.InvalidInputError` (or its subclasses
     :class:`~mechderive.errors.UnphysicalInertiaError`, :class:`~mechderive.errors.NonFiniteValueError`)
