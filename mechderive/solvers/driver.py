@@ -188,7 +188,7 @@ class Trajectory:
     def omega(self) -> np.ndarray:
         """(N, 3) body components of ω (the term's ``omega`` components of ``y``)."""
         i = self.omega_index
-        return self.y[:, i[0]:i[-1] + 1] if i == tuple(range(i[0], i[-1] + 1)) else self.y[:, list(i)]
+        return self.y[:, i[0]:i[-1] + 1] if i and i == tuple(range(i[0], i[-1] + 1)) else self.y[:, list(i)]
 
     @functools.cached_property
     def R(self) -> np.ndarray:
