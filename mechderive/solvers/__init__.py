@@ -4,7 +4,9 @@
 * :mod:`.composition` — triple-jump, Suzuki and Yoshida weights raising a symmetric order-2 step to 4 and 6;
 * :mod:`.lie_poisson` — exact axis sub-flows of the free rigid body and their composition (one body or M).
 
-The system-level entry point is :func:`mechderive.systems.free_top.integrate.integrate_free_top`.
+The one integration driver for every system is :mod:`.driver` (a :class:`~.driver.Term`, DOP853 compiled to C
+or SciPy, the splittings, the tolerance controller, one :class:`~.driver.Trajectory`); the systems' entry
+points (:func:`mechderive.systems.free_top.integrate.integrate_free_top`, ...) run through it.
 """
 
 from __future__ import annotations

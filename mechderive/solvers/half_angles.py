@@ -45,8 +45,8 @@ import numpy as np
 
 __all__ = ["HalfAngleTracker", "SampleTracker", "MAX_DEPTH", "MAX_REFINEMENTS", "SPEED_MARGIN", "DECADES", "DECADE_THRESHOLDS",
            "PASSAGE_MARGIN", "CHUNK", "follow_fixed_steps",
-           "euler_angles_from_half_angles", "initial_half_angles", "rotation_angle_between", "passages_within",
-           "output_error_estimates"]
+           "euler_angles_from_half_angles", "initial_half_angles", "half_angles_of_quaternion", "sleeping_split",
+           "rotation_angle_between", "passages_within", "output_error_estimates"]
 
 #: At most this many halvings of a step (2⁻⁴⁸ of a step is below the resolution of t).
 MAX_DEPTH = 48
@@ -215,6 +215,40 @@ class HalfAngleTracker:
 def initial_half_angles(phi: float, psi: float) -> tuple[float, float]:
     """(σ, δ) = ((φ + ψ)/2, (φ - ψ)/2)."""
     return 0.5 * (phi + psi), 0.5 * (phi - psi)
+
+
+def half_angles_of_quaternion(q0: np.ndarray) -> tuple[np.ndarray, tuple[float, float]]:
+    """(q0 with the sign of euler_to_quaternion(φ0, θ0, ψ0), (σ0, δ0)) for the Euler angles (3.54) of R(q0).
+
+    The angles are those of :func:`~mechderive.kinematics.rotations.euler_angles_from_matrix`; q0 and
+    -q0 are the same rotation, and the tracked arguments are those of the sign
+    :func:`~mechderive.kinematics.conversions.euler_to_quaternion` gives.
+    """
+    from ..kinematics.conversions import euler_to_quaternion, quaternion_to_matrix
+    from ..kinematics.rotations import euler_angles_from_matrix
+
+    phi, theta, psi = (float(v) for v in euler_angles_from_matrix(quaternion_to_matrix(q0)))
+    if float(np.dot(euler_to_quaternion(phi, theta, psi), q0)) < 0.0:
+        q0 = -q0
+    return q0, initial_half_angles(phi, psi)
+
+
+def sleeping_split(q: np.ndarray, args: np.ndarray, rates: tuple[float, float]) -> np.ndarray:
+    """(σ, δ) with the turning split between φ and ψ as the initial rates split it, where only their sum exists.
+
+    A body that stays exactly at θ = 0 (q1 = q2 = 0 throughout: a sleeping top) turns by φ + ψ only:
+    the tracker holds δ = (φ - ψ)/2 and φ, ψ would share the turning equally.  With the initial rates
+    ``rates`` = (φ̇0, ψ̇0) (as a closed form or a scene file gives them: φ = φ0 + φ̇0 t, ψ = ψ0 + ψ̇0 t),
+    δ - δ0 = κ (σ - σ0), κ = (φ̇0 - ψ̇0)/(φ̇0 + ψ̇0); at θ = π (q0 = q3 = 0 throughout) likewise
+    σ - σ0 = κ' (δ - δ0), κ' = (φ̇0 + ψ̇0)/(φ̇0 - ψ̇0).  Elsewhere ``args`` unchanged.
+    """
+    phi_dot, psi_dot = rates
+    out = args.copy()
+    if not np.any(q[:, 1:3]) and phi_dot + psi_dot != 0.0:
+        out[:, 1] = args[0, 1] + (phi_dot - psi_dot) / (phi_dot + psi_dot) * (args[:, 0] - args[0, 0])
+    elif not np.any(q[:, [0, 3]]) and phi_dot - psi_dot != 0.0:
+        out[:, 0] = args[0, 0] + (phi_dot + psi_dot) / (phi_dot - psi_dot) * (args[:, 1] - args[0, 1])
+    return out
 
 
 def euler_angles_from_half_angles(q: np.ndarray, args: np.ndarray) -> np.ndarray:

@@ -137,7 +137,7 @@ class CompiledSplitting:
         """States after each output interval, shape (len(intervals) + 1, n); row 0 is ``y0``.
 
         ``intervals``: (number of composed steps, step size) per interval, as
-        :func:`mechderive.systems.free_top.integrate._interval_steps` gives; ``weights`` the
+        :func:`mechderive.solvers.driver.interval_steps` gives; ``weights`` the
         composition weights (order 2, 4 or 6).  The C loop returns to Python about every
         :data:`~.dop853_c.CHUNK_SECONDS` (so Ctrl-C is seen), with the same arithmetic as one call.
         Raises :class:`~mechderive.errors.IntegrationError` when the state stops being finite,

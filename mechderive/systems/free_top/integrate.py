@@ -51,9 +51,6 @@ Units: any consistent set (kg m², rad/s, s, N m).
 
 from __future__ import annotations
 
-import functools
-import math
-import time
 from dataclasses import dataclass
 from typing import Any, Callable, Sequence
 
@@ -62,38 +59,29 @@ import numpy as np
 from ...core.validate import as_finite_array, check_positive, check_rotation_matrix
 from ...errors import IntegrationError, InvalidInputError, ShapeError  # noqa: F401 (IntegrationError re-exported)
 from ...kinematics.conversions import matrix_to_quaternion, quaternion_to_matrix
-from ...solvers import lie_poisson
-from ...solvers.dop853 import check_backend, run_dop853
-from ...solvers.limits import (MAX_STEPS, check_fixed_steps, check_max_steps, check_outputs, first_nonfinite_row,
-                               nonfinite_state)
-from ...solvers.composition import suzuki_fractal, yoshida6
-from ...solvers.half_angles import (euler_angles_from_half_angles, follow_fixed_steps, initial_half_angles,
-                                    output_error_estimates)
+from ...solvers import driver
+from ...solvers.dop853 import check_backend
+from ...solvers.driver import (METHODS, RICHARDSON_MARGIN, SPLITTING_ORDERS, Ensemble, Term, Trajectory,  # noqa: F401
+                               check_times as _check_times, interval_steps as _interval_steps)
+from ...solvers.half_angles import half_angles_of_quaternion
+from ...solvers.limits import check_max_steps, check_outputs
 
 __all__ = ["integrate_free_top", "integrate_free_top_ensemble", "FreeTopTrajectory", "FreeTopEnsemble",
-           "IntegrationError", "METHODS", "SPLITTING_ORDERS", "RICHARDSON_MARGIN", "gyroscopic_form"]
-
-METHODS = ("DOP853", "splitting")
-#: Composition weights used for each order of the splitting (see mechderive.solvers.composition).
-SPLITTING_ORDERS: dict[int, tuple[float, ...]] = {2: (1.0,), 4: suzuki_fractal(4), 6: yoshida6()}
-#: Richardson's |y_h - y_(h/2)| · 2^p/(2^p - 1) is the error up to relative corrections O(h) (a few %
-#: at the steps used); this margin makes the reported estimate cover them.
-RICHARDSON_MARGIN = 1.25
+           "IntegrationError", "METHODS", "SPLITTING_ORDERS", "RICHARDSON_MARGIN", "gyroscopic_form", "TERM"]
 
 Torque = Callable[[float, np.ndarray, np.ndarray], Any]
 
 
 # --- results ---------------------------------------------------------------------------------
 
-@dataclass(frozen=True)
-class FreeTopTrajectory:
+@dataclass
+class FreeTopTrajectory(Trajectory):
     """One integrated motion.
 
-    Attributes
+    Attributes (those of :class:`~mechderive.solvers.driver.Trajectory`: ``t`` (N,) times (s),
+    ``omega`` (N, 3) body components of ω (rad/s), ``quaternion`` (N, 4) of A = Rᵀ, scalar first,
+    projected onto |q| = 1, ``y`` the state as integrated, ``invariants``, ...; and)
     ----------
-    t : (N,) times (s); ``t[0]`` is the initial time.
-    omega : (N, 3) body components of ω (rad/s).
-    quaternion : (N, 4) unit quaternion of A = Rᵀ, scalar first (projected onto |q| = 1).
     euler_angles : (N, 3) Euler angles (φ, θ, ψ) (3.54) with R(φ, θ, ψ) = R, φ and ψ continuous, their
         turns counted along every step of the integrator, not unwrapped from the samples
         (:mod:`~mechderive.solvers.half_angles`; as for the heavy top,
@@ -120,60 +108,19 @@ class FreeTopTrajectory:
     unresolved_passages : see ``euler_angle_error_estimate`` (0 without an estimate).
     pole_clearance : lower bounds of min_t sin(θ/2) and min_t cos(θ/2) along the integrated path.
     """
-
-    t: np.ndarray
-    omega: np.ndarray
-    quaternion: np.ndarray
-    euler_angles: np.ndarray
-    method: str
-    order: int | None
-    energy_drift: float
-    angular_momentum_drift: float
-    quaternion_norm_drift: float
-    n_evaluations: int
-    n_steps: int | None
-    error_estimate: float | None
-    error_estimate_kind: str
-    wall_time: float
-    backend: str = "scipy"
-    omega_error_estimate: float | None = None
-    rotation_error_estimate: float | None = None
-    euler_angle_error_estimate: float | None = None
-    unresolved_passages: int = 0
-    pole_clearance: tuple[float, float] = (math.inf, math.inf)
-
-    @functools.cached_property
-    def R(self) -> np.ndarray:
-        """(N, 3, 3) rotation matrices of the chapter's convention, e_a = R_ab ẽ_b."""
-        return quaternion_to_matrix(self.quaternion)
+    energy_drift: float = 0.0
+    angular_momentum_drift: float = 0.0
 
 
-@dataclass(frozen=True)
-class FreeTopEnsemble:
+@dataclass
+class FreeTopEnsemble(Ensemble):
     """M free bodies integrated together by the splitting (shapes (N, M, ·)); see :class:`FreeTopTrajectory`."""
 
-    t: np.ndarray
-    omega: np.ndarray
-    quaternion: np.ndarray
-    order: int
-    energy_drift: np.ndarray
-    angular_momentum_drift: np.ndarray
-    quaternion_norm_drift: np.ndarray
-    n_steps: int
-    wall_time: float
-
-    @property
-    def R(self) -> np.ndarray:
-        """(N, M, 3, 3) rotation matrices, e_a = R_ab ẽ_b."""
-        return quaternion_to_matrix(self.quaternion)
-
-    @property
-    def body_steps_per_second(self) -> float:
-        """Throughput: bodies × steps / wall time."""
-        return self.omega.shape[1] * self.n_steps / self.wall_time if self.wall_time > 0 else math.inf
+    energy_drift: np.ndarray | None = None
+    angular_momentum_drift: np.ndarray | None = None
 
 
-# --- compiled equations ----------------------------------------------------------------------
+# --- the derived system ----------------------------------------------------------------------
 
 def gyroscopic_form(rows: Any, omega: Sequence[Any]) -> list:
     """Euler's equations (3.33) regrouped for evaluation: ((I_b - I_c)/I_a) ω_b ω_c + rest, per row.
@@ -210,50 +157,42 @@ def _state_exprs() -> tuple[Any, list, list]:
     return exprs, [*w, *q], [I1, I2, I3, *tau_symbols]
 
 
-@functools.cache
-def _state_rhs() -> Callable[..., list]:
-    """(ω̇, q̇) as one compiled scalar function of (ω1..3, q0..3, I1..3, τ1..3)."""
-    from ...core.compile import compile_scalar
+def _invariant_exprs() -> list:
+    """T (3.46) and L² (3.47) of the model, in ω and I1..3."""
+    from .model import model
 
-    exprs, state, par = _state_exprs()
-    return compile_scalar(exprs, [*state, *par], name="free_top_state_rhs")
+    m = model()
+    return [m.energy, m.angular_momentum_squared]
+
+
+def _inertia(params: Sequence[Any]) -> np.ndarray:
+    """(I1, I2, I3) from the parameters (I1, I2, I3, τ1, τ2, τ3) (scalars or (M,) arrays)."""
+    return np.stack(np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in params[:3])), axis=-1)
+
+
+#: The free body for the driver: (ω̇, q̇) in parameters (I1..3, τ1..3), its invariants T and L²,
+#: the Lie–Poisson splitting.
+TERM = Term("free_top", _state_exprs, invariants=_invariant_exprs, invariant_names=("energy", "L_squared"),
+            quaternion=3, rhs_module="math", splitting="lie_poisson", inertia=_inertia)
+
+
+def _state_rhs() -> Callable[..., list]:
+    """(ω̇, q̇) as the scalar function SciPy's stepper calls, of (ω1..3, q0..3, I1..3, τ1..3)."""
+    return TERM.rhs("math")
 
 
 def _compiled_dop853() -> Any:
     """The DOP853 stepper compiled to C with (ω̇, q̇) of the free body (τ as parameters), or None."""
-    from ...solvers.dop853_c import compiled_dop853
-
-    return compiled_dop853("free_top", _state_exprs)
+    return driver._compiled(TERM)
 
 
-@functools.cache
-def _invariants() -> tuple[Callable[..., Any], Callable[..., Any]]:
-    """Vectorised T(ω, I) (3.46) and L²(ω, I) (3.47), compiled from the model (disk-cached)."""
-    from ...core.compile import compile_cached
-
-    def build(quantity: str):
-        def derive():
-            from .model import I1, I2, I3, model, omega_symbols
-
-            return [*omega_symbols(), I1, I2, I3], getattr(model(), quantity)
-        return derive
-    return (compile_cached("free_top.energy", build("energy")),
-            compile_cached("free_top.L_squared", build("angular_momentum_squared")))
-
-
-def _drifts(omega: np.ndarray, inertia: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Max relative deviation of T and |L| from their initial values; omega (N, ..., 3), inertia (..., 3)."""
-    energy, lsq = _invariants()
-    w = np.moveaxis(omega, -1, 0)
-    Ia = np.moveaxis(np.broadcast_to(inertia, omega.shape), -1, 0)
-    T = np.asarray(energy(w[0], w[1], w[2], Ia[0], Ia[1], Ia[2]))
-    L = np.sqrt(np.asarray(lsq(w[0], w[1], w[2], Ia[0], Ia[1], Ia[2])))
-
+def _drifts(invariants: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Max relative deviation of T and |L| from their initial values; invariants (N, ..., 2) = (T, L²)."""
     def rel(x: np.ndarray) -> np.ndarray:
         scale = np.where(x[0] > 0, x[0], 1.0)
         return np.max(np.abs(x - x[0]), axis=0) / scale
 
-    return rel(T), rel(L)
+    return rel(invariants[..., 0]), rel(np.sqrt(invariants[..., 1]))
 
 
 # --- input checks ----------------------------------------------------------------------------
@@ -266,30 +205,6 @@ def _check_inertia(I: Any, shape: tuple[int | None, ...], strict: bool = True) -
     return arr
 
 
-def _check_times(t_eval: Any) -> np.ndarray:
-    t = as_finite_array(t_eval, "t_eval", shape=(None,))
-    if t.size < 2:
-        raise InvalidInputError(f"expected `t_eval` to hold at least 2 times, got {t.size}")
-    bad = np.flatnonzero(np.diff(t) <= 0)
-    if bad.size:
-        k = int(bad[0])
-        raise InvalidInputError(
-            f"expected `t_eval` strictly increasing, got t_eval[{k + 1}] = {t[k + 1]:g} <= t_eval[{k}] = {t[k]:g}")
-    return t
-
-
-def _check_method(method: str) -> str:
-    if method not in METHODS:
-        raise InvalidInputError(f"expected method one of {', '.join(map(repr, METHODS))}, got {method!r}")
-    return method
-
-
-def _check_order(order: int) -> int:
-    if order not in SPLITTING_ORDERS:
-        raise InvalidInputError(f"expected order one of {', '.join(map(str, SPLITTING_ORDERS))}, got {order!r}")
-    return order
-
-
 def _initial_quaternion(R0: Any, name: str = "R0") -> np.ndarray:
     if R0 is None:
         return np.array([1.0, 0.0, 0.0, 0.0])
@@ -297,23 +212,6 @@ def _initial_quaternion(R0: Any, name: str = "R0") -> np.ndarray:
     if arr.shape != (3, 3):
         raise ShapeError(f"expected `{name}` to have shape (3, 3), got {arr.shape}")
     return matrix_to_quaternion(check_rotation_matrix(arr, name))
-
-
-def _initial_half_angles(q0: np.ndarray) -> tuple[np.ndarray, tuple[float, float]]:
-    """(q0 with the sign of euler_to_quaternion(φ0, θ0, ψ0), (σ0, δ0)) for the Euler angles of R(q0)."""
-    from ...kinematics.conversions import euler_to_quaternion
-    from ...kinematics.rotations import euler_angles_from_matrix
-
-    phi, theta, psi = (float(v) for v in euler_angles_from_matrix(quaternion_to_matrix(q0)))
-    if float(np.dot(euler_to_quaternion(phi, theta, psi), q0)) < 0.0:
-        q0 = -q0  # the same rotation; the tracked arguments are those of euler_to_quaternion's sign
-    return q0, initial_half_angles(phi, psi)
-
-
-def _project(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(q/|q|, max over time of ||q| - 1|) for q of shape (N, ..., 4)."""
-    norm = np.linalg.norm(q, axis=-1, keepdims=True)
-    return q / norm, np.max(np.abs(norm[..., 0] - 1.0), axis=0)
 
 
 # --- the public entry points -----------------------------------------------------------------
@@ -339,18 +237,11 @@ def integrate_free_top(I: Sequence[float], omega0: Sequence[float], t_eval: Sequ
         since it calls back into Python).
     backend : DOP853 only: ``"auto"``, ``"c"`` (raises :class:`IntegrationError` without a C
         compiler, or with a torque) or ``"scipy"``.
-    estimate_error : estimate the error of every output — ω (rad/s), R and q, the Euler angles
-        (rad) — by one extra run: ``omega_error_estimate``, ``rotation_error_estimate``,
-        ``euler_angle_error_estimate`` and their maximum ``error_estimate``, the recipe in
-        ``error_estimate_kind`` (:func:`~mechderive.solvers.half_angles.output_error_estimates`):
-        DOP853 — the distance to a rerun at rtol/1000, atol/1000, × 1/(1 - √r) for the ratio r of
-        the tolerances (:func:`~mechderive.solvers.dop853.reference_tolerance`: the rerun's rtol
-        is floored at 2.3e-14, SciPy's limit; below 2.3e-13 it runs looser, at 10·rtol, and the
-        figure is an upper bound ~10× the error); splitting — Richardson with the known order p,
-        |y_h - y_(h/2)| · 2^p / (2^p - 1) · 1.25 (the rerun costs twice the main run).
-    max_steps : steps allowed to each run (default :data:`~mechderive.solvers.limits.MAX_STEPS` = 10⁷):
-        DOP853 stops there with an :class:`IntegrationError` saying where it got to; the splitting,
-        whose steps are known in advance, refuses at once.
+    estimate_error : estimate the error of every output by one extra run — ``omega_error_estimate``
+        (rad/s), ``rotation_error_estimate`` (R and q, rad), ``euler_angle_error_estimate`` (rad) and
+        their maximum ``error_estimate``, the recipe in ``error_estimate_kind`` (as
+        :func:`mechderive.solvers.driver.integrate` says: a rerun at rtol/1000, or Richardson).
+    max_steps : steps allowed to each run (default 10⁷, :func:`mechderive.solvers.driver.integrate`).
 
     Raises :class:`~mechderive.errors.UnphysicalInertiaError`, :class:`~mechderive.errors.ShapeError`,
     :class:`~mechderive.errors.InvalidInputError` on bad input, :class:`IntegrationError` when a run
@@ -358,38 +249,54 @@ def integrate_free_top(I: Sequence[float], omega0: Sequence[float], t_eval: Sequ
     a torque that blows the motion up), the step size collapses, or ``max_steps`` is reached.
     Compiled runs return to Python every ~0.05 s, so Ctrl-C stops them.
     """
-    method = _check_method(method)
+    method = driver.check_method(method)
     max_steps = check_max_steps(max_steps)
     backend = check_backend(backend)
     inertia = _check_inertia(I, (3,), strict)
     w0 = as_finite_array(omega0, "omega0", shape=(3,))
     t = _check_times(t_eval)
     q0 = _initial_quaternion(R0)
-    if method == "DOP853":
-        for name, value in (("step", step), ("order", order)):
-            if value is not None:
-                raise InvalidInputError(f"expected `{name}` only with method='splitting', got {name}={value!r} "
-                                        "with method='DOP853'")
-        rtol = 1e-10 if rtol is None else check_positive(rtol, "rtol")
-        atol = 1e-12 if atol is None else check_positive(atol, "atol")
-        if torque is not None and not callable(torque):
-            raise InvalidInputError(f"expected `torque` to be callable τ(t, omega, R), got {torque!r}")
-        return _checked(_run_dop853, inertia, w0, q0, t, rtol, atol, torque, estimate_error, backend, max_steps)
-    if backend != "auto":
-        raise InvalidInputError(f"expected `backend` only with method='DOP853', got backend={backend!r} "
-                                "with method='splitting'")
-    for name, value in (("rtol", rtol), ("atol", atol)):
-        if value is not None:
-            raise InvalidInputError(f"expected `{name}` only with method='DOP853', got {name}={value!r} "
-                                    "with method='splitting' (set `step` instead)")
+    if method == "splitting":
+        if backend != "auto":
+            raise InvalidInputError(f"expected `backend` only with method='DOP853', got backend={backend!r} "
+                                    "with method='splitting'")
+        if torque is not None and rtol is None and atol is None:  # (a given rtol or atol is said first, below)
+            raise InvalidInputError("expected torque=None with method='splitting' (a free-body integrator), "
+                                    "got a torque; use method='DOP853'")
+    rtol, atol, step, order = driver.check_method_options(method, rtol=rtol, atol=atol, step=step, order=order)
+    par = (*(float(x) for x in inertia), 0.0, 0.0, 0.0)
+    parameters_at = None
     if torque is not None:
-        raise InvalidInputError("expected torque=None with method='splitting' (a free-body integrator), "
-                                "got a torque; use method='DOP853'")
-    if step is None:
-        raise InvalidInputError("expected a step size `step` > 0 with method='splitting', got step=None")
-    step = check_positive(step, "step")
-    order = _check_order(4 if order is None else order)
-    return _checked(_run_splitting, inertia, w0, q0, t, step, order, estimate_error, max_steps)
+        if not callable(torque):
+            raise InvalidInputError(f"expected `torque` to be callable τ(t, omega, R), got {torque!r}")
+        if backend == "c":
+            raise IntegrationError("expected backend='auto' or 'scipy' with a torque (it calls back into Python), "
+                                   "got backend='c'")
+        parameters_at = _torque_parameters(torque, par[:3])
+    q0, args0 = half_angles_of_quaternion(q0)
+    with np.errstate(all="ignore"):  # a state out of range is said by the checks below, not as RuntimeWarnings
+        run = driver.integrate(TERM, np.concatenate([w0, q0]), t, par, method=method,
+                               rtol=1e-10 if rtol is None else rtol, atol=1e-12 if atol is None else atol,
+                               step=step, order=order, backend=backend, estimate_error=estimate_error, track=args0,
+                               max_steps=max_steps, parameters_at=parameters_at)
+        e_drift, l_drift = _drifts(run.invariants)
+        traj = run.extend(FreeTopTrajectory, energy_drift=float(e_drift), angular_momentum_drift=float(l_drift))
+    driver.check_trajectory(traj, dict(energy_drift=traj.energy_drift,
+                                       angular_momentum_drift=traj.angular_momentum_drift))
+    return traj
+
+
+def _torque_parameters(torque: Torque, inertia: tuple) -> Callable[[float, np.ndarray], tuple]:
+    """The parameters (I1..3, τ1..3) at (t, y): τ(t, ω, R) of the caller's function, checked."""
+    def at(t_: float, y: np.ndarray) -> tuple:
+        q = y[3:] / np.linalg.norm(y[3:])
+        tau = np.asarray(torque(t_, y[:3].copy(), quaternion_to_matrix(q)), dtype=float)
+        if tau.shape != (3,):
+            raise ShapeError(f"expected `torque(t, omega, R)` to return shape (3,), got {tau.shape}")
+        if not np.all(np.isfinite(tau)):
+            raise InvalidInputError(f"expected `torque(t, omega, R)` finite, got {tau.tolist()} at t = {t_:g}")
+        return (*inertia, *tau.tolist())
+    return at
 
 
 def integrate_free_top_ensemble(I: Any, omega0: Any, t_eval: Sequence[float], *, step: float, order: int = 4,
@@ -413,10 +320,7 @@ def integrate_free_top_ensemble(I: Any, omega0: Any, t_eval: Sequence[float], *,
     inertia = _check_inertia(I, (M, 3) if np.ndim(I) == 2 else (3,), strict)
     t = _check_times(t_eval)
     step = check_positive(step, "step")
-    order = _check_order(order)
-    intervals = _interval_steps(t, step)
-    check_fixed_steps("the Lie–Poisson splitting", sum(n for n, _ in intervals), check_max_steps(max_steps),
-                      step=step, t_end=float(t[-1]))
+    order = driver.check_order(order)
     if R0 is None or np.ndim(R0) == 2:
         q0 = np.broadcast_to(_initial_quaternion(R0), (M, 4))
     else:
@@ -424,181 +328,11 @@ def integrate_free_top_ensemble(I: Any, omega0: Any, t_eval: Sequence[float], *,
         if arr.shape != (M, 3, 3):
             raise ShapeError(f"expected `R0` to have shape (3, 3) or ({M}, 3, 3), got {arr.shape}")
         q0 = matrix_to_quaternion(check_rotation_matrix(arr, "R0"))
-    weights = SPLITTING_ORDERS[order]
-    I_cols = inertia.T if inertia.ndim == 2 else inertia  # (3, M) or (3,)
-    L = np.array((np.broadcast_to(inertia, (M, 3)) * w0).T, order="C")  # (3, M), a writable copy
-    q = np.array(q0.T, order="C")  # (4, M)
-    omegas, quats = [w0.copy()], [q0.copy()]
-    n_total = 0
-    start = time.perf_counter()
-    with np.errstate(all="ignore"):  # a state out of range is said below, not as RuntimeWarnings
-        for k, (n, h) in enumerate(intervals):
-            lie_poisson.propagate_ensemble(L, q, I_cols, h, n, weights)
-            bad = first_nonfinite_row(np.vstack([L, q]).T)
-            if bad is not None:
-                raise nonfinite_state("the Lie–Poisson splitting", t=float(t[k]), steps=n_total, member=bad)
-            n_total += n
-            omegas.append((L / np.reshape(I_cols, (3, -1))).T.copy())
-            quats.append(q.T.copy())
-    wall = time.perf_counter() - start
+    par = (*(inertia[..., a] for a in range(3)), 0.0, 0.0, 0.0)
+    ens = driver.integrate_ensemble(TERM, np.concatenate([w0, q0], axis=-1), t, par, step=step, order=order,
+                                    max_steps=max_steps)
     with np.errstate(all="ignore"):
-        omega = np.stack(omegas)
-        quat, norm_drift = _project(np.stack(quats))
-        e_drift, l_drift = _drifts(omega, inertia)
-    check_outputs("the Lie–Poisson splitting", dict(omega=omega, quaternion=quat, energy_drift=e_drift,
+        e_drift, l_drift = _drifts(ens.invariants)
+    check_outputs("the Lie–Poisson splitting", dict(omega=ens.omega, quaternion=ens.quaternion, energy_drift=e_drift,
                                                     angular_momentum_drift=l_drift))
-    return FreeTopEnsemble(t=t, omega=omega, quaternion=quat, order=order, energy_drift=e_drift,
-                           angular_momentum_drift=l_drift, quaternion_norm_drift=norm_drift, n_steps=n_total,
-                           wall_time=wall)
-
-
-# --- the two methods -------------------------------------------------------------------------
-
-def _checked(run: Callable[..., FreeTopTrajectory], *args: Any) -> FreeTopTrajectory:
-    """``run(*args)`` with NumPy's overflow warnings off, its outputs then required finite (a state
-    within the floating-point range whose energy or tracking overflows is said once, clearly)."""
-    with np.errstate(all="ignore"):
-        traj = run(*args)
-    check_outputs(f"{traj.method} (backend {traj.backend!r})", dict(
-        omega=traj.omega, quaternion=traj.quaternion, euler_angles=traj.euler_angles,
-        energy_drift=traj.energy_drift, angular_momentum_drift=traj.angular_momentum_drift,
-        quaternion_norm_drift=traj.quaternion_norm_drift, omega_error_estimate=traj.omega_error_estimate,
-        rotation_error_estimate=traj.rotation_error_estimate,
-        euler_angle_error_estimate=traj.euler_angle_error_estimate))
-    return traj
-
-
-def _run_dop853(inertia: np.ndarray, w0: np.ndarray, q0: np.ndarray, t: np.ndarray, rtol: float, atol: float,
-                torque: Torque | None, estimate_error: bool, backend: str,
-                max_steps: int = MAX_STEPS) -> FreeTopTrajectory:
-    I1, I2, I3 = (float(x) for x in inertia)
-    compiled = None
-    if backend == "c" and torque is not None:
-        raise IntegrationError("expected backend='auto' or 'scipy' with a torque (it calls back into Python), "
-                               "got backend='c'")
-    if backend != "scipy" and torque is None:
-        compiled = _compiled_dop853()
-        if compiled is None and backend == "c":
-            from ...solvers.dop853_c import unavailable_error
-            raise unavailable_error("free_top", "scipy")
-    rhs = _state_rhs() if compiled is None else None
-
-    if compiled is not None:
-        fun = None
-    elif torque is None:
-        def fun(_t: float, y: np.ndarray) -> list:
-            return rhs(*y.tolist(), I1, I2, I3, 0.0, 0.0, 0.0)
-    else:
-        def fun(t_: float, y: np.ndarray) -> list:
-            q = y[3:] / np.linalg.norm(y[3:])
-            tau = np.asarray(torque(t_, y[:3].copy(), quaternion_to_matrix(q)), dtype=float)
-            if tau.shape != (3,):
-                raise ShapeError(f"expected `torque(t, omega, R)` to return shape (3,), got {tau.shape}")
-            if not np.all(np.isfinite(tau)):
-                raise InvalidInputError(f"expected `torque(t, omega, R)` finite, got {tau.tolist()} at t = {t_:g}")
-            return rhs(*y.tolist(), I1, I2, I3, *tau.tolist())
-
-    q0, args0 = _initial_half_angles(q0)
-    y0 = np.concatenate([w0, q0])
-
-    sol, wall, ref, kind, factor = run_dop853(fun, t, y0, rtol, atol, reference=estimate_error, compiled=compiled,
-                                              params=(I1, I2, I3, 0.0, 0.0, 0.0), track=(3, args0), max_steps=max_steps)
-    reference = None
-    if ref is not None:
-        reference = (ref.y[:3].T, ref.y[3:].T, ref.args, ref.near)
-        kind = f"distance to {kind}; ω, R and the Euler angles"
-    return _finish(inertia, t, (sol.y[:3].T.copy(), sol.y[3:].T, sol.args, sol.closest, sol.near), method="DOP853",
-                   order=None, n_evaluations=int(sol.nfev), n_steps=sol.steps, wall=wall, reference=reference,
-                   kind=kind, factor=factor, backend="scipy" if compiled is None else "c")
-
-
-def _finish(inertia: np.ndarray, t: np.ndarray, run: tuple, *, method: str, order: int | None, n_evaluations: int,
-            n_steps: int | None, wall: float, reference: tuple | None, kind: str, factor: float,
-            backend: str) -> FreeTopTrajectory:
-    """The trajectory from ``run`` = (ω, raw q, tracked (σ, δ), closest, near) and a reference run's
-    (ω, raw q, (σ, δ), near) or None, whose distance × ``factor`` gives the estimates."""
-    omega, q_raw, args, closest, near = run
-    quat, norm_drift = _project(q_raw)
-    angles = euler_angles_from_half_angles(quat, args)
-    est = dict(omega=None, rotation=None, euler=None, unresolved_passages=0)
-    err = None
-    if reference is not None:
-        w_ref, q_ref, args_ref, near_ref = reference
-        q_ref = q_ref / np.linalg.norm(q_ref, axis=-1, keepdims=True)
-        est = output_error_estimates((omega, quat, angles, near),
-                                     (w_ref, q_ref, euler_angles_from_half_angles(q_ref, args_ref), near_ref), factor,
-                                     n_steps)
-        err = max(est["omega"], est["rotation"], est["euler"])
-        if est["unresolved_passages"]:
-            kind += (f"; e3 passed {est['unresolved_passages']} time(s) closer to ±ẽ3 than the error of R: the "
-                     "turns of φ and ψ are then not determined (2π each time; φ ± ψ and R are)")
-    e_drift, l_drift = _drifts(omega, inertia)
-    return FreeTopTrajectory(t=t, omega=omega, quaternion=quat, euler_angles=angles, method=method, order=order,
-                             energy_drift=float(e_drift), angular_momentum_drift=float(l_drift),
-                             quaternion_norm_drift=float(norm_drift), n_evaluations=n_evaluations, n_steps=n_steps,
-                             error_estimate=err, error_estimate_kind=kind, wall_time=wall, backend=backend,
-                             omega_error_estimate=est["omega"], rotation_error_estimate=est["rotation"],
-                             euler_angle_error_estimate=est["euler"], unresolved_passages=est["unresolved_passages"],
-                             pole_clearance=(float(closest[1]), float(closest[0])))
-
-
-def _interval_steps(t: np.ndarray, step: float, refine: int = 1) -> list[tuple[int, float]]:
-    """(n, h) for each output interval: n = refine · ceil(Δt/step) equal steps of h = Δt/n."""
-    out = []
-    for dt in np.diff(t):
-        n = max(1, math.ceil(dt / step - 1e-9)) * refine
-        out.append((n, float(dt) / n))
-    return out
-
-
-def _splitting_path(inertia: np.ndarray, w0: np.ndarray, q0: np.ndarray, args0: tuple[float, float], t: np.ndarray,
-                    step: float, weights: tuple[float, ...], refine: int = 1) -> tuple[tuple, int]:
-    """((ω, raw q, (σ, δ), closest, near) at ``t``, steps): the state between every two steps is followed
-    by :func:`~mechderive.solvers.half_angles.follow_fixed_steps`."""
-    y0 = np.array([*(inertia * w0), *q0])
-    clock = [float(t[0]), 0]  # the time and the steps done where the next pieces start, for messages
-
-    def advance(y: np.ndarray, pieces: list[tuple[int, float]]) -> np.ndarray:
-        t0, done = clock
-        clock[0] += sum(n * h for n, h in pieces)
-        clock[1] += sum(n for n, _ in pieces)
-        rows, at = [tuple(y)], t0
-        for n, h in pieces:
-            L, q = lie_poisson.propagate(list(rows[-1][:3]), list(rows[-1][3:]), inertia, h, n, weights, record=rows,
-                                         t0=at)
-            rows.append((*L, *q))
-            at += n * h
-        out = np.array(rows)
-        bad = first_nonfinite_row(out)
-        if bad is not None:  # NaN passes through math's functions silently: said here, per batch
-            steps = np.repeat([h for _, h in pieces], [n for n, _ in pieces])[:max(bad - 1, 0)]
-            raise nonfinite_state("the Lie–Poisson splitting", t=t0 + float(np.sum(steps)), steps=done + len(steps))
-        return out
-
-    intervals = _interval_steps(t, step, refine)
-    ends, args, tracker = follow_fixed_steps(y0, inertia, args0, intervals, advance)
-    arr = np.vstack([y0, ends])
-    return (arr[:, :3] / inertia, arr[:, 3:], args, tracker.closest, tracker.near), sum(n for n, _ in intervals)
-
-
-def _run_splitting(inertia: np.ndarray, w0: np.ndarray, q0: np.ndarray, t: np.ndarray, step: float, order: int,
-                   estimate_error: bool, max_steps: int = MAX_STEPS) -> FreeTopTrajectory:
-    weights = SPLITTING_ORDERS[order]
-    # the steps are known before running: the longest run (the estimate's, at step/2) is checked
-    refine = 2 if estimate_error else 1
-    check_fixed_steps("the Lie–Poisson splitting", sum(n for n, _ in _interval_steps(t, step, refine)), max_steps,
-                      step=step / refine, t_end=float(t[-1]))
-    q0, args0 = _initial_half_angles(q0)
-    start = time.perf_counter()
-    run, n_steps = _splitting_path(inertia, w0, q0, args0, t, step, weights)
-    wall = time.perf_counter() - start
-    reference, kind, factor = None, "not requested", 1.0
-    if estimate_error:
-        fine, _ = _splitting_path(inertia, w0, q0, args0, t, step, weights, refine=2)
-        reference, factor = (fine[0], fine[1], fine[2], fine[4]), RICHARDSON_MARGIN * 2**order / (2**order - 1)
-        kind = (f"Richardson: max |y_h - y_(h/2)| · 2^{order}/(2^{order} - 1) · {RICHARDSON_MARGIN}, y = ω, the "
-                "orientation and the "
-                "Euler angles")
-    n_sub = n_steps * lie_poisson.subflows_per_step(weights) + (len(t) - 1)
-    return _finish(inertia, t, run, method="splitting", order=order, n_evaluations=n_sub, n_steps=n_steps,
-                   wall=wall, reference=reference, kind=kind, factor=factor, backend="python")
+    return ens.extend(FreeTopEnsemble, energy_drift=e_drift, angular_momentum_drift=l_drift)

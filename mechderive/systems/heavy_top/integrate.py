@@ -67,8 +67,6 @@ Units: any consistent set (SI above).
 from __future__ import annotations
 
 import functools
-import math
-import time
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, Callable, Sequence
@@ -76,41 +74,31 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from ...core.validate import check_positive
-from ...errors import InvalidInputError, ShapeError
-from ...kinematics.conversions import euler_to_quaternion, quaternion_to_matrix
+from ...errors import IntegrationError, InvalidInputError, ShapeError  # noqa: F401 (IntegrationError re-exported)
+from ...kinematics.conversions import euler_to_quaternion
 from ...kinematics.rotations import continuous_euler_angles  # noqa: F401 (re-exported)
-from ...solvers import kick_drift
-from ...solvers.half_angles import (euler_angles_from_half_angles, follow_fixed_steps, initial_half_angles,
-                                    output_error_estimates)
-# shared with the free top's integrators: composition weights per order, the error class, the checks of
-# t_eval and the cutting of each output interval into equal steps
-from ...errors import IntegrationError  # noqa: F401 (re-exported)
-from ...solvers.dop853 import check_backend, run_dop853
-from ...solvers.limits import (MAX_STEPS, check_fixed_steps, check_max_steps, check_outputs, first_nonfinite_row,
-                               nonfinite_state)
-from ..free_top.integrate import RICHARDSON_MARGIN, SPLITTING_ORDERS, _check_times, _interval_steps
+from ...solvers import driver
+from ...solvers.dop853 import check_backend
+from ...solvers.driver import METHODS, SPLITTING_BACKENDS, SPLITTING_ORDERS, Ensemble, Term, Trajectory  # noqa: F401
+from ...solvers.half_angles import initial_half_angles
+from ...solvers.limits import check_max_steps, check_outputs
+from .parameters import INITIAL_KEYS, PARAM_KEYS, check_initial, check_params  # noqa: F401
 
 __all__ = ["integrate_heavy_top", "integrate_heavy_top_ensemble", "HeavyTopTrajectory", "HeavyTopEnsemble",
            "check_params", "check_initial", "initial_state", "continuous_euler_angles", "IntegrationError",
-           "METHODS", "SPLITTING_ORDERS", "PARAM_KEYS", "INITIAL_KEYS"]
-
-METHODS = ("DOP853", "splitting")
-#: The splitting's backends: the stage loop compiled to C with the derived stage map, or Python.
-SPLITTING_BACKENDS = ("auto", "c", "python")
-from .parameters import INITIAL_KEYS, PARAM_KEYS, check_initial, check_params  # noqa: E402,F401
+           "METHODS", "SPLITTING_ORDERS", "PARAM_KEYS", "INITIAL_KEYS", "TERM"]
 
 
 # --- results ---------------------------------------------------------------------------------
 
-@dataclass(frozen=True)
-class HeavyTopTrajectory:
+@dataclass
+class HeavyTopTrajectory(Trajectory):
     """One integrated motion of the heavy symmetric top.
 
-    Attributes
+    Attributes (those of :class:`~mechderive.solvers.driver.Trajectory`: ``t`` (N,) times (s),
+    ``omega`` (N, 3) body components of ω (rad/s), ``quaternion`` (N, 4) of A = Rᵀ, scalar first,
+    projected onto |q| = 1, ``y`` the state as integrated, ``invariants``, ...; and)
     ----------
-    t : (N,) times (s); ``t[0]`` is the initial time.
-    omega : (N, 3) body components of ω (rad/s).
-    quaternion : (N, 4) unit quaternion of A = Rᵀ, scalar first (projected onto |q| = 1).
     euler_angles : (N, 3) Euler angles (φ, θ, ψ) (3.54) with R(φ, θ, ψ) = R: θ = 2 atan2(√(q1² + q2²),
         √(q0² + q3²)) ∈ [0, π]; φ and ψ continuous, their turns counted along every step of the
         integrator — refined with its dense output where needed — not unwrapped from the samples
@@ -144,64 +132,28 @@ class HeavyTopTrajectory:
         (its distances, in the quaternion, from the pole and from the bottom); ``inf`` where it stays
         exactly at θ = 0 (θ = π) throughout, 0 where a step could not resolve its passage.
     """
+    params: dict | None = None
+    energy_drift: float = 0.0
+    p_phi_drift: float = 0.0
+    p_psi_drift: float = 0.0
 
-    t: np.ndarray
-    omega: np.ndarray
-    quaternion: np.ndarray
-    euler_angles: np.ndarray
-    params: dict
-    method: str
-    order: int | None
-    energy_drift: float
-    p_phi_drift: float
-    p_psi_drift: float
-    quaternion_norm_drift: float
-    n_evaluations: int
-    n_steps: int | None
-    omega_error_estimate: float | None
-    rotation_error_estimate: float | None
-    euler_angle_error_estimate: float | None
-    angle_error_estimate: float | None
-    error_estimate_kind: str
-    wall_time: float
-    backend: str = "scipy"
-    unresolved_passages: int = 0
-    pole_clearance: tuple[float, float] = (math.inf, math.inf)
-
-    @functools.cached_property
-    def R(self) -> np.ndarray:
-        """(N, 3, 3) rotation matrices of the chapter's convention, e_a = R_ab ẽ_b."""
-        return quaternion_to_matrix(self.quaternion)
-
-    @functools.cached_property
-    def invariants(self) -> np.ndarray:
-        """(N, 3): E (3.65), p_φ (3.64), p_ψ (3.63) along the motion."""
-        return _evaluate_invariants(self.omega, self.quaternion, self.params)
+    @property
+    def angle_error_estimate(self) -> float | None:
+        """The largest of the three estimates (ω, R, Euler angles), or None: ``error_estimate``."""
+        return self.error_estimate
 
 
-@dataclass(frozen=True)
-class HeavyTopEnsemble:
+@dataclass
+class HeavyTopEnsemble(Ensemble):
     """M heavy tops integrated together by the splitting: arrays (N, M, ·), drifts (M,).
 
     See :class:`HeavyTopTrajectory` for the fields; ``theta`` is θ(t) of every member.
     """
 
-    t: np.ndarray
-    omega: np.ndarray
-    quaternion: np.ndarray
-    params: dict
-    order: int
-    energy_drift: np.ndarray
-    p_phi_drift: np.ndarray
-    p_psi_drift: np.ndarray
-    quaternion_norm_drift: np.ndarray
-    n_steps: int
-    wall_time: float
-
-    @property
-    def R(self) -> np.ndarray:
-        """(N, M, 3, 3) rotation matrices, e_a = R_ab ẽ_b."""
-        return quaternion_to_matrix(self.quaternion)
+    params: dict | None = None
+    energy_drift: np.ndarray | None = None
+    p_phi_drift: np.ndarray | None = None
+    p_psi_drift: np.ndarray | None = None
 
     @property
     def theta(self) -> np.ndarray:
@@ -210,13 +162,8 @@ class HeavyTopEnsemble:
         # R33 = q0² - q1² - q2² + q3², √(R13² + R23²) = 2 √((q0² + q3²)(q1² + q2²)) for |q| = 1
         return np.arctan2(2.0 * np.sqrt((q0**2 + q3**2) * (q1**2 + q2**2)), q0**2 + q3**2 - q1**2 - q2**2)
 
-    @property
-    def body_steps_per_second(self) -> float:
-        """Throughput: bodies × composed steps / wall time."""
-        return self.omega.shape[1] * self.n_steps / self.wall_time if self.wall_time > 0 else math.inf
 
-
-# --- compiled equations ----------------------------------------------------------------------
+# --- the derived system ----------------------------------------------------------------------
 
 def _symbols() -> tuple[list, list, list]:
     from ...systems.free_top.model import omega_symbols
@@ -237,23 +184,53 @@ def _rhs_exprs() -> Any:
     return sp.Matrix([*gyroscopic_form(m.euler_rhs, omega_symbols()), *m.quaternion_rhs])
 
 
-@functools.cache
-def _rhs() -> Callable[..., list]:
-    """(ω̇, q̇) as one compiled scalar function of (ω1..3, q0..3, I1, I3, M, g, l)."""
-    from ...core.compile import compile_scalar
-
+def _build() -> tuple:
     state, _, par = _symbols()
-    return compile_scalar(_rhs_exprs(), [*state, *par], name="heavy_top_rhs")
+    return _rhs_exprs(), state, par
+
+
+def _invariant_exprs() -> list:
+    """E (3.65), p_φ (3.64), p_ψ (3.63) of the model, in (ω, q) and the parameters."""
+    from .rigid_model import model
+
+    m = model()
+    return [m.energy, m.p_phi, m.p_psi]
+
+
+def _stage() -> tuple:
+    """kick(h_kick) ∘ free_flow(h_free), derived: (stage map, (L, q), h_free, h_kick, parameters)."""
+    from .rigid_model import h_free, h_kick, model
+
+    _, state, par = _symbols()
+    return model().stage_map, state, h_free, h_kick, par
+
+
+def _inertia(params: Sequence[Any]) -> np.ndarray:
+    """(I1, I1, I3) from the parameters (I1, I3, M, g, l) (scalars or (M,) arrays)."""
+    return np.stack(np.broadcast_arrays(*(np.asarray(params[k], dtype=float) for k in (0, 0, 1))), axis=-1)
+
+
+#: The heavy top for the driver: (ω̇, q̇) in the parameters (I1, I3, M, g, l), its invariants, and the
+#: kick–drift–kick splitting on the derived stage map.
+TERM = Term("heavy_top", _build, invariants=_invariant_exprs, invariant_names=("energy", "p_phi", "p_psi"),
+            quaternion=3, rhs_module="math", splitting="kick_drift", stage=_stage, inertia=_inertia,
+            passage_note="; the apex passed {n} time(s) closer to the pole (or the bottom) than the error of R: the "
+                         "turns of φ and ψ are then not determined (2π each time; φ ± ψ and R are)")
+
+
+def _rhs() -> Callable[..., list]:
+    """(ω̇, q̇) as the scalar function SciPy's stepper calls, of (ω1..3, q0..3, I1, I3, M, g, l)."""
+    return TERM.rhs("math")
 
 
 def _compiled_dop853() -> Any:
     """The DOP853 stepper compiled to C with (ω̇, q̇), or None without a C compiler (or with it switched off)."""
-    from ...solvers.dop853_c import compiled_dop853
+    return driver._compiled(TERM)
 
-    def build():
-        state, _, par = _symbols()
-        return _rhs_exprs(), state, par
-    return compiled_dop853("heavy_top", build)
+
+def _compiled_splitting() -> Any:
+    """The splitting compiled to C with the derived stage map, or None without a usable C compiler."""
+    return driver._compiled_splitting(TERM)
 
 
 @functools.cache
@@ -270,46 +247,21 @@ def _euler_rates_to_omega() -> Callable[..., Any]:
     return compile_cached("heavy_top.euler_rates_to_omega", build)
 
 
-@functools.cache
-def _stage(vectorised: bool = False) -> Callable[..., Any]:
-    """kick(h_kick) ∘ free_flow(h_free) compiled: f(L1..3, q0..3, h_free, h_kick, I1, I3, M, g, l)."""
-    from ...core.compile import compile_expressions, compile_scalar
-    from .rigid_model import h_free, h_kick, model
-
-    _, state, par = _symbols()
-    args = [*state, h_free, h_kick, *par]
-    exprs = list(model().stage_map)
-    if vectorised:
-        return compile_expressions(exprs, args, name="heavy_top_stage")
-    return compile_scalar(exprs, args, name="heavy_top_stage")
-
-
-@functools.cache
-def _invariants() -> Callable[..., Any]:
-    """Vectorised (E, p_φ, p_ψ)(ω, q, params), compiled from the model (disk-cached)."""
-    from ...core.compile import compile_cached
-
-    def build():
-        from .rigid_model import model
-
-        state, _, par = _symbols()
-        m = model()
-        return [*state, *par], [m.energy, m.p_phi, m.p_psi]
-    return compile_cached("heavy_top.rigid_invariants", build)
-
-
 def _param_values(p: Mapping[str, Any]) -> list[Any]:
     return [p[k] for k in PARAM_KEYS]
 
 
 def _evaluate_invariants(omega: np.ndarray, q: np.ndarray, p: Mapping[str, Any]) -> np.ndarray:
+    """(E, p_φ, p_ψ) at ω (..., 3), q (..., 4), shape (..., 3)."""
     w, qq = np.moveaxis(omega, -1, 0), np.moveaxis(q, -1, 0)
-    return np.asarray(_invariants()(*w, *qq, *_param_values(p)))
+    vals = [np.asarray(v, dtype=float) for v in TERM.invariant_function()(*_param_values(p), *w, *qq)]
+    return np.stack(np.broadcast_arrays(*vals), axis=-1)
 
 
-def _drifts(omega: np.ndarray, q: np.ndarray, p: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Scaled max deviations of E, p_φ, p_ψ from their initial values; omega (N, ..., 3), q (N, ..., 4)."""
-    inv = _evaluate_invariants(omega, q, p)
+def _drifts(inv: np.ndarray, omega: np.ndarray, q: np.ndarray,
+            p: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Scaled max deviations of E, p_φ, p_ψ (``inv`` (N, ..., 3)) from their initial values; omega (N, ..., 3),
+    q (N, ..., 4)."""
     no_gravity = dict(p, g=0.0 * np.asarray(p["g"]))
     T0 = _evaluate_invariants(omega[0], q[0], no_gravity)[..., 0]
     mgl = np.asarray(p["M"]) * np.asarray(p["g"]) * np.asarray(p["l"])
@@ -341,24 +293,6 @@ def initial_state(initial: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray]:
     return w0, euler_to_quaternion(initial["phi"], initial["theta"], initial["psi"])
 
 
-def _check_method(method: str) -> str:
-    if method not in METHODS:
-        raise InvalidInputError(f"expected method one of {', '.join(map(repr, METHODS))}, got {method!r}")
-    return method
-
-
-def _check_order(order: int) -> int:
-    if order not in SPLITTING_ORDERS:
-        raise InvalidInputError(f"expected order one of {', '.join(map(str, SPLITTING_ORDERS))}, got {order!r}")
-    return order
-
-
-def _project(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(q/|q| with the sign kept continuous along axis 0, max ||q| - 1|) for q (N, ..., 4)."""
-    norm = np.linalg.norm(q, axis=-1, keepdims=True)
-    return q / norm, np.max(np.abs(norm[..., 0] - 1.0), axis=0)
-
-
 # --- the public entry points -----------------------------------------------------------------
 
 def integrate_heavy_top(params: Mapping[str, float], initial: Mapping[str, float], t_eval: Sequence[float], *,
@@ -382,18 +316,11 @@ def integrate_heavy_top(params: Mapping[str, float], initial: Mapping[str, float
     backend : ``"auto"`` (compiled C where a C compiler is found), ``"c"`` (raises
         :class:`IntegrationError` without a compiler), or the uncompiled path: ``"scipy"``
         (DOP853) / ``"python"`` (the splitting's stage loop in Python).
-    estimate_error : estimate the error of every output — ω (rad/s), R and q, the Euler angles
-        (rad) — by one extra run: ``omega_error_estimate``, ``rotation_error_estimate``,
-        ``euler_angle_error_estimate`` and their maximum ``angle_error_estimate``, the recipe in
-        ``error_estimate_kind`` (:func:`~mechderive.solvers.half_angles.output_error_estimates`):
-        DOP853 — the distance to a rerun at rtol/1000, atol/1000, × 1/(1 - √r) for the ratio r of
-        the tolerances (:func:`~mechderive.solvers.dop853.reference_tolerance`: the rerun's rtol
-        is floored at 2.3e-14, SciPy's limit; below 2.3e-13 it runs looser, at 10·rtol, and the
-        figure is an upper bound ~10× the error); splitting — Richardson with the known order p,
-        |y_h - y_(h/2)| · 2^p / (2^p - 1) · 1.25 (the rerun costs twice the main run).
-    max_steps : steps allowed to each run (default :data:`~mechderive.solvers.limits.MAX_STEPS` = 10⁷):
-        DOP853 stops there with an :class:`IntegrationError` saying where it got to; the splitting,
-        whose steps are known in advance, refuses at once.
+    estimate_error : estimate the error of every output by one extra run — ``omega_error_estimate``
+        (rad/s), ``rotation_error_estimate`` (R and q, rad), ``euler_angle_error_estimate`` (rad) and
+        their maximum ``angle_error_estimate``, the recipe in ``error_estimate_kind`` (as
+        :func:`mechderive.solvers.driver.integrate` says: a rerun at rtol/1000, or Richardson).
+    max_steps : steps allowed to each run (default 10⁷, :func:`mechderive.solvers.driver.integrate`).
 
     Raises :class:`~mechderive.errors.InvalidInputError` (or its subclasses
     :class:`~mechderive.errors.UnphysicalInertiaError`, :class:`~mechderive.errors.NonFiniteValueError`)
@@ -402,7 +329,7 @@ def integrate_heavy_top(params: Mapping[str, float], initial: Mapping[str, float
     collapses, or ``max_steps`` is reached.  Compiled runs return to Python every ~0.05 s, so Ctrl-C
     stops them.
     """
-    method = _check_method(method)
+    method = driver.check_method(method)
     max_steps = check_max_steps(max_steps)
     if method == "DOP853":
         backend = check_backend(backend)
@@ -415,27 +342,21 @@ def integrate_heavy_top(params: Mapping[str, float], initial: Mapping[str, float
     init = check_initial(initial)
     if any(np.ndim(v) for v in init.values()):
         raise ShapeError("expected scalar `initial` values (use integrate_heavy_top_ensemble for arrays), got arrays")
-    t = _check_times(t_eval)
+    t = driver.check_times(t_eval)
     w0, q0 = initial_state(init)
-    args0 = initial_half_angles(init["phi"], init["psi"])
-    rates = (float(init["phi_dot"]), float(init["psi_dot"]))
-    if method == "DOP853":
-        for name, value in (("step", step), ("order", order)):
-            if value is not None:
-                raise InvalidInputError(f"expected `{name}` only with method='splitting', got {name}={value!r} "
-                                        "with method='DOP853'")
-        rtol = 1e-10 if rtol is None else check_positive(rtol, "rtol")
-        atol = rtol / 100 if atol is None else check_positive(atol, "atol")
-        return _checked(_run_dop853, p, w0, q0, args0, rates, t, rtol, atol, estimate_error, backend, max_steps)
-    for name, value in (("rtol", rtol), ("atol", atol)):
-        if value is not None:
-            raise InvalidInputError(f"expected `{name}` only with method='DOP853', got {name}={value!r} "
-                                    "with method='splitting' (set `step` instead)")
-    if step is None:
-        raise InvalidInputError("expected a step size `step` > 0 with method='splitting', got step=None")
-    step = check_positive(step, "step")
-    order = _check_order(4 if order is None else order)
-    return _checked(_run_splitting, p, w0, q0, args0, rates, t, step, order, estimate_error, backend, max_steps)
+    rtol, atol, step, order = driver.check_method_options(method, rtol=rtol, atol=atol, step=step, order=order)
+    rtol = 1e-10 if rtol is None else rtol
+    with np.errstate(all="ignore"):  # a state out of range is said by the checks below, not as RuntimeWarnings
+        run = driver.integrate(TERM, np.concatenate([w0, q0]), t, _param_values(p), method=method, rtol=rtol,
+                               atol=rtol / 100 if atol is None else atol, step=step, order=order, backend=backend,
+                               estimate_error=estimate_error, track=initial_half_angles(init["phi"], init["psi"]),
+                               euler_rates=(float(init["phi_dot"]), float(init["psi_dot"])), max_steps=max_steps)
+        e, pf, ps = _drifts(run.invariants, run.omega, run.quaternion, p)
+        traj = run.extend(HeavyTopTrajectory, params=p, energy_drift=float(e), p_phi_drift=float(pf),
+                          p_psi_drift=float(ps))
+    driver.check_trajectory(traj, dict(energy_drift=traj.energy_drift, p_phi_drift=traj.p_phi_drift,
+                                       p_psi_drift=traj.p_psi_drift))
+    return traj
 
 
 def integrate_heavy_top_ensemble(params: Mapping[str, Any], initial: Mapping[str, Any], t_eval: Sequence[float], *,
@@ -468,215 +389,14 @@ def integrate_heavy_top_ensemble(params: Mapping[str, Any], initial: Mapping[str
     M = shape[0] if shape else 1
     init = {k: np.broadcast_to(v, (M,)).astype(float) for k, v in init.items()}
     pv = {k: (v if np.ndim(v) == 0 else np.asarray(v, dtype=float)) for k, v in p.items()}
-    t = _check_times(t_eval)
+    t = driver.check_times(t_eval)
     step = check_positive(step, "step")
-    weights = SPLITTING_ORDERS[_check_order(order)]
-    intervals = _interval_steps(t, step)
-    check_fixed_steps("the kick–drift–kick splitting", sum(n for n, _ in intervals), check_max_steps(max_steps),
-                      step=step, t_end=float(t[-1]))
+    order = driver.check_order(order)
     w0, q0 = initial_state(init)
-    I = np.stack(np.broadcast_arrays(pv["I1"], pv["I1"], pv["I3"]), axis=-1) * np.ones((M, 1))
-    y = [*(I * w0).T, *q0.T]
-    stage = _stage(vectorised=True)
-    par = _param_values(pv)
-    omegas, quats = [w0.copy()], [q0.copy()]
-    n_total = 0
-    start = time.perf_counter()
-    with np.errstate(all="ignore"):  # a state out of range is said below, not as RuntimeWarnings
-        for k, (n, h) in enumerate(intervals):
-            y = kick_drift.propagate_ensemble(stage, y, par, h, n, weights)
-            bad = first_nonfinite_row(np.stack(y, axis=-1))
-            if bad is not None:
-                raise nonfinite_state("the kick–drift–kick splitting", t=float(t[k]), steps=n_total, member=bad)
-            n_total += n
-            omegas.append(np.stack(y[:3], axis=-1) / I)
-            quats.append(np.stack(y[3:], axis=-1))
-    wall = time.perf_counter() - start
+    ens = driver.integrate_ensemble(TERM, np.concatenate([w0, q0], axis=-1), t, _param_values(pv), step=step,
+                                    order=order, max_steps=max_steps)
     with np.errstate(all="ignore"):
-        omega = np.stack(omegas)
-        quat, norm_drift = _project(np.stack(quats))
-        e, pf, ps = _drifts(omega, quat, pv)
-    check_outputs("the kick–drift–kick splitting", dict(omega=omega, quaternion=quat, energy_drift=e, p_phi_drift=pf,
-                                                        p_psi_drift=ps))
-    return HeavyTopEnsemble(t=t, omega=omega, quaternion=quat, params=pv, order=order, energy_drift=e,
-                            p_phi_drift=pf, p_psi_drift=ps, quaternion_norm_drift=norm_drift, n_steps=n_total,
-                            wall_time=wall)
-
-
-# --- the two methods -------------------------------------------------------------------------
-
-def _checked(run: Callable[..., HeavyTopTrajectory], *args: Any) -> HeavyTopTrajectory:
-    """``run(*args)`` with NumPy's overflow warnings off, its outputs then required finite (a state
-    within the floating-point range whose energy or tracking overflows is said once, clearly)."""
-    with np.errstate(all="ignore"):
-        traj = run(*args)
-    check_outputs(f"{traj.method} (backend {traj.backend!r})", dict(
-        omega=traj.omega, quaternion=traj.quaternion, euler_angles=traj.euler_angles,
-        energy_drift=traj.energy_drift, p_phi_drift=traj.p_phi_drift, p_psi_drift=traj.p_psi_drift,
-        quaternion_norm_drift=traj.quaternion_norm_drift, omega_error_estimate=traj.omega_error_estimate,
-        rotation_error_estimate=traj.rotation_error_estimate,
-        euler_angle_error_estimate=traj.euler_angle_error_estimate))
-    return traj
-
-
-def _finish(p: dict, t: np.ndarray, run: tuple, rates: tuple[float, float], *, method: str, order: int | None,
-            n_evaluations: int, n_steps: int | None, wall: float, reference: tuple | None, kind: str,
-            factor: float = 1.0, backend: str = "python") -> HeavyTopTrajectory:
-    """The trajectory from ``run`` = (ω (N, 3), raw q (N, 4), tracked (σ, δ) (N, 2), closest [2], near
-    (2, DECADES)) and the same of a reference run (or None), whose distance × ``factor`` gives the
-    estimates; ``rates`` = (φ̇0, ψ̇0) for a top that sleeps exactly (see :func:`_sleeping_split`)."""
-    omega, q_raw, args, closest, near = run
-    quat, norm_drift = _project(q_raw)
-    angles = euler_angles_from_half_angles(quat, _sleeping_split(quat, args, rates))
-    w_err = rot_err = eul_err = all_err = None
-    n_unresolved = 0
-    if reference is not None:
-        w_ref, q_ref, args_ref, _, near_ref = reference
-        q_ref = q_ref / np.linalg.norm(q_ref, axis=-1, keepdims=True)
-        ang_ref = euler_angles_from_half_angles(q_ref, _sleeping_split(q_ref, args_ref, rates))
-        est = output_error_estimates((omega, quat, angles, near), (w_ref, q_ref, ang_ref, near_ref), factor,
-                                     n_steps)
-        w_err, rot_err, eul_err = est["omega"], est["rotation"], est["euler"]
-        n_unresolved = est["unresolved_passages"]
-        all_err = max(w_err, rot_err, eul_err)
-        if n_unresolved:
-            kind += (f"; the apex passed {n_unresolved} time(s) closer to the pole (or the bottom) than the error "
-                     "of R: the turns of φ and ψ are then not determined (2π each time; φ ± ψ and R are)")
-    e, pf, ps = _drifts(omega, quat, p)
-    return HeavyTopTrajectory(t=t, omega=omega, quaternion=quat, euler_angles=angles, params=p, method=method,
-                              order=order, energy_drift=float(e), p_phi_drift=float(pf), p_psi_drift=float(ps),
-                              quaternion_norm_drift=float(norm_drift), n_evaluations=n_evaluations, n_steps=n_steps,
-                              omega_error_estimate=w_err, rotation_error_estimate=rot_err,
-                              euler_angle_error_estimate=eul_err, angle_error_estimate=all_err,
-                              error_estimate_kind=kind, wall_time=wall, backend=backend,
-                              unresolved_passages=n_unresolved,
-                              pole_clearance=(float(closest[1]), float(closest[0])))
-
-
-def _sleeping_split(q: np.ndarray, args: np.ndarray, rates: tuple[float, float]) -> np.ndarray:
-    """(σ, δ) with the split of the turning between φ and ψ of the initial rates where only their sum exists.
-
-    A top that sleeps exactly at θ = 0 (q1 = q2 = 0 throughout) turns by φ + ψ only: the tracker
-    holds δ = (φ - ψ)/2 and φ, ψ would share the turning equally.  The closed form (and the scene
-    file) give φ = φ0 + φ̇0 t, ψ = ψ0 + ψ̇0 t, so δ - δ0 = κ (σ - σ0), κ = (φ̇0 - ψ̇0)/(φ̇0 + ψ̇0);
-    at θ = π (q0 = q3 = 0 throughout) likewise σ - σ0 = κ' (δ - δ0), κ' = (φ̇0 + ψ̇0)/(φ̇0 - ψ̇0).
-    """
-    phi_dot, psi_dot = rates
-    out = args.copy()
-    if not np.any(q[:, 1:3]) and phi_dot + psi_dot != 0.0:
-        out[:, 1] = args[0, 1] + (phi_dot - psi_dot) / (phi_dot + psi_dot) * (args[:, 0] - args[0, 0])
-    elif not np.any(q[:, [0, 3]]) and phi_dot - psi_dot != 0.0:
-        out[:, 0] = args[0, 0] + (phi_dot + psi_dot) / (phi_dot - psi_dot) * (args[:, 1] - args[0, 1])
-    return out
-
-
-def _scipy_rhs(args: tuple) -> Callable[[float, np.ndarray], list]:
-    """f(t, y) for SciPy's DOP853: the compiled-to-Python (ω̇, q̇) at the parameter values ``args``."""
-    rhs = _rhs()
-
-    def fun(_t: float, y: np.ndarray) -> list:
-        return rhs(*y.tolist(), *args)
-    return fun
-
-
-def _run_dop853(p: dict, w0: np.ndarray, q0: np.ndarray, args0: tuple[float, float], rates: tuple[float, float],
-                t: np.ndarray, rtol: float, atol: float, estimate_error: bool, backend: str,
-                max_steps: int = MAX_STEPS) -> HeavyTopTrajectory:
-    args = tuple(_param_values(p))
-    y0 = np.concatenate([w0, q0])
-    compiled = None if backend == "scipy" else _compiled_dop853()
-    if compiled is None and backend == "c":
-        from ...solvers.dop853_c import unavailable_error
-        raise unavailable_error("heavy_top", "scipy")
-    fun = None if compiled is not None else _scipy_rhs(args)
-
-    sol, wall, ref, kind, factor = run_dop853(fun, t, y0, rtol, atol, reference=estimate_error, compiled=compiled,
-                                              params=args, track=(3, args0), max_steps=max_steps)
-    reference = None
-    if ref is not None:
-        reference = (ref.y[:3].T, ref.y[3:].T, ref.args, ref.closest, ref.near)
-        kind = f"distance to {kind}; ω, R and the Euler angles"
-    return _finish(p, t, (sol.y[:3].T.copy(), sol.y[3:].T.copy(), sol.args, sol.closest, sol.near), rates,
-                   method="DOP853",
-                   order=None, n_evaluations=int(sol.nfev), n_steps=sol.steps, wall=wall, reference=reference,
-                   kind=kind, factor=factor, backend="scipy" if compiled is None else "c")
-
-
-def _compiled_splitting() -> Any:
-    """The splitting compiled to C with the derived stage map, or None without a usable C compiler."""
-    from ...solvers.kick_drift_c import compiled_splitting
-
-    def build():
-        from .rigid_model import h_free, h_kick, model
-
-        _, state, par = _symbols()
-        return model().stage_map, state, h_free, h_kick, par
-    return compiled_splitting("heavy_top", build)
-
-
-def _splitting_path(p: dict, w0: np.ndarray, q0: np.ndarray, args0: tuple[float, float], t: np.ndarray,
-                    step: float, weights: tuple[float, ...], refine: int = 1,
-                    compiled: Any = None) -> tuple[tuple, int]:
-    """((ω, raw q, (σ, δ), closest, near) at ``t``, composed steps): the state after every step is
-    followed by :func:`~mechderive.solvers.half_angles.follow_fixed_steps`, so the angles' turns are
-    counted per step."""
-    inertia = np.array([p["I1"], p["I1"], p["I3"]])
-    par = _param_values(p)
-    y0 = np.array([*(inertia * w0), *q0])
-    stage = None if compiled is not None else _stage()
-    clock = [float(t[0]), 0]  # the time and the steps done where the next pieces start, for messages
-
-    def advance(y: np.ndarray, pieces: list[tuple[int, float]]) -> np.ndarray:
-        t0, done = clock
-        clock[0] += sum(n * h for n, h in pieces)
-        clock[1] += sum(n for n, _ in pieces)
-        if compiled is not None:
-            return compiled.propagate_recorded(y, par, pieces, weights, t0=t0)
-        rows, at = [y.tolist()], t0
-        for n, h in pieces:
-            end = kick_drift.propagate(stage, rows[-1], par, h, n, weights, record=rows, t0=at)
-            rows.append(end)
-            at += n * h
-        out = np.array(rows)
-        bad = first_nonfinite_row(out)
-        if bad is not None:  # NaN passes through math's functions silently: said here, per batch
-            steps = np.repeat([h for _, h in pieces], [n for n, _ in pieces])[:max(bad - 1, 0)]
-            raise nonfinite_state("the kick–drift–kick splitting (Python)", t=t0 + float(np.sum(steps)),
-                                  steps=done + len(steps))
-        return out
-
-    intervals = _interval_steps(t, step, refine)
-    ends, args, tracker = follow_fixed_steps(y0, inertia, args0, intervals, advance)
-    arr = np.vstack([y0, ends])
-    return (arr[:, :3] / inertia, arr[:, 3:], args, tracker.closest, tracker.near), sum(n for n, _ in intervals)
-
-
-def _run_splitting(p: dict, w0: np.ndarray, q0: np.ndarray, args0: tuple[float, float], rates: tuple[float, float],
-                   t: np.ndarray, step: float, order: int, estimate_error: bool,
-                   backend: str = "auto", max_steps: int = MAX_STEPS) -> HeavyTopTrajectory:
-    weights = SPLITTING_ORDERS[order]
-    # the steps are known before running: the longest run (the estimate's, at step/2) is checked
-    refine = 2 if estimate_error else 1
-    check_fixed_steps("the kick–drift–kick splitting", sum(n for n, _ in _interval_steps(t, step, refine)), max_steps,
-                      step=step / refine, t_end=float(t[-1]))
-    # compile (once per process) outside the timed run
-    compiled = None if backend == "python" else _compiled_splitting()
-    if compiled is None and backend == "c":
-        from ...solvers.dop853_c import unavailable_error
-        raise unavailable_error("heavy_top", "python", kind="kdk")
-    if compiled is None:
-        _stage()
-    start = time.perf_counter()
-    run, n_steps = _splitting_path(p, w0, q0, args0, t, step, weights, compiled=compiled)
-    wall = time.perf_counter() - start
-    reference, kind, factor = None, "not requested", 1.0
-    if estimate_error:
-        reference, _ = _splitting_path(p, w0, q0, args0, t, step, weights, refine=2, compiled=compiled)
-        factor = RICHARDSON_MARGIN * 2.0**order / (2.0**order - 1.0)
-        kind = (f"Richardson: max |y_h - y_(h/2)| · 2^{order}/(2^{order} - 1) · {RICHARDSON_MARGIN}, y = ω, the "
-                "orientation and the "
-                "Euler angles")
-    n_stage = n_steps * kick_drift.stages_per_step(weights) + (len(t) - 1)
-    return _finish(p, t, run, rates, method="splitting", order=order, n_evaluations=n_stage, n_steps=n_steps,
-                   wall=wall, reference=reference, kind=kind, factor=factor,
-                   backend="python" if compiled is None else "c")
+        e, pf, ps = _drifts(ens.invariants, ens.omega, ens.quaternion, pv)
+    check_outputs("the kick–drift–kick splitting", dict(omega=ens.omega, quaternion=ens.quaternion, energy_drift=e,
+                                                        p_phi_drift=pf, p_psi_drift=ps))
+    return ens.extend(HeavyTopEnsemble, params=pv, energy_drift=e, p_phi_drift=pf, p_psi_drift=ps)
