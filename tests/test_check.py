@@ -261,7 +261,7 @@ def test_hints_for_clashing_names():
 
 
 def test_bad_options():
-    with pytest.raises(InvalidInputError, match="expected a system among free_top, heavy_top, got 'spinning'"):
+    with pytest.raises(InvalidInputError, match="expected a system among free_top, heavy_top, rigid_body, got 'spinning'"):
         check("E = E", "spinning")
     with pytest.raises(InvalidInputError, match="^points: expected an integer between 20 and 1000, got 5$"):
         check("E = E", HEAVY, points=5)

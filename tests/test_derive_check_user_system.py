@@ -184,7 +184,7 @@ def test_a_malformed_system_is_refused_naming_it():
             derive("bad_dc")
         with pytest.raises(InvalidInputError, match="expected a system with derivations for derive, got 'empty_dc'"):
             derive("empty_dc")
-        with pytest.raises(InvalidInputError, match="expected a system among free_top, heavy_top, got 'empty_dc'"):
+        with pytest.raises(InvalidInputError, match="expected a system among free_top, heavy_top, rigid_body, got 'empty_dc'"):
             check("E = E", "empty_dc")
     finally:
         registry.unregister("bad_dc")

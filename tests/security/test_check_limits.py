@@ -178,7 +178,7 @@ def test_options_after_the_positionals(argv, capsys):
     (["check", "heavy_top", "E = E", "--points", "5"], "mechderive: error: --points: expected an integer between "
                                                         "20 and 1000, got 5"),
     (["check", "spinning", "E = E"], "mechderive: error: SYSTEM: expected a system among free_top, heavy_top, "
-                                     "got 'spinning'"),
+                                     "rigid_body, got 'spinning'"),
     (["check", "heavy_top"], "mechderive: error: CLAIM: expected a claim like 'dt(E) = 0'"),
     (["check", "heavy_top", "__import__('os').system('echo hi') = 0"],
      "mechderive: error: claim \"__import__('os').system('echo hi') = 0\": expected a call of one of sin"),
