@@ -23,7 +23,7 @@ inequalities; heavy top: I1 >= M l^2 + I3/2), as the solvers require; --any-mome
 A numeric agreement counts only when the digits resolve every scale in the claim; an overflow or
 a difference below the working precision is undecided, never an identity.
 
-SYSTEM is a registered system (heavy_top, free_top, or one registered by a program) or a scene
+SYSTEM is a system of the registry that has check symbols (`mechderive scenes --systems`) or a scene
 file ending .toml (the system it configures; --parameters puts its [parameters] in as --given).
 
 examples:
@@ -39,13 +39,13 @@ def add_parser(sub: "argparse._SubParsersAction") -> None:
     p = sub.add_parser(
         "check",
         help="decide whether a formula is an identity, holds on every motion, or is false",
-        description="Decide a claim 'LHS = RHS' about a system (heavy_top, free_top, a registered one or a scene "
+        description="Decide a claim 'LHS = RHS' about a system (one of the registry's, or a scene "
         "file's) against the "
         "toolkit's derived model: exactly where possible, else at random points with 30/60-digit arithmetic.",
         epilog=_EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    p.add_argument("system", metavar="SYSTEM", help="heavy_top, free_top, a registered system, or a scene file "
+    p.add_argument("system", metavar="SYSTEM", help="a system of the registry, or a scene file "
                                                     "ending .toml")
     p.add_argument("claim", metavar="CLAIM", nargs="?", help="the claim 'LHS = RHS'")
     p.add_argument("--given", metavar="'NAME = EXPR'", action="append", default=[],

@@ -36,11 +36,11 @@ def add_parser(sub: "argparse._SubParsersAction") -> None:
         "derive",
         help="print derived equations (text, LaTeX, SymPy, Python, C, JSON)",
         description="Print a system's derived quantities: by default its Lagrangian, equations of motion and "
-                    "conserved quantities; or the QUANTITY names given (see --list).  Systems: free_top, "
-                    "heavy_top, falling_cat, any registered system, rotation, angular_velocity, inertia SHAPE, "
+                    "conserved quantities; or the QUANTITY names given (see --list).  Systems: any system of "
+                    "the registry (`mechderive scenes --systems`), rotation, angular_velocity, inertia SHAPE, "
                     "or a scene file SCENE.toml (the system it configures).",
     )
-    p.add_argument("system", metavar="SYSTEM", help="free_top, heavy_top, falling_cat, a registered system, rotation, "
+    p.add_argument("system", metavar="SYSTEM", help="a system of the registry (mechderive scenes --systems), rotation, "
                                                     "angular_velocity, inertia (then SHAPE first), or a scene file "
                                                     "ending .toml")
     p.add_argument("quantities", metavar="QUANTITY", nargs="*", help="quantities to print (default: the main ones)")
