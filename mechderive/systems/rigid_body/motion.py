@@ -81,21 +81,6 @@ class Motion:
 
 # --- compiled pieces (derived once, cached on disk) ----------------------------------------------
 
-def _gyroscopic(rows: Any, omega: Any) -> list:
-    """Euler's equations regrouped as ((I_b - I_c)/I_a) ω_b ω_c + rest per row: the difference of the moments
-    is formed first, exact when they are equal (a symmetric body's ω3 then stays exactly constant)."""
-    import itertools
-
-    import sympy as sp
-
-    products = [a * b for a, b in itertools.combinations_with_replacement(omega, 2)]
-    out = []
-    for row in rows:
-        terms = sp.collect(sp.expand(row), products, evaluate=False)
-        out.append(sp.Add(*(sp.together(c) * m for m, c in terms.items())))
-    return out
-
-
 @functools.cache
 def _term(torque: Any) -> Any:
     """The driver's :class:`~mechderive.solvers.driver.Term` of this body's equations (one per torque text)."""
@@ -107,12 +92,13 @@ def _term(torque: Any) -> Any:
     def build() -> tuple:
         import sympy as sp
 
+        from ..free_top.integrate import gyroscopic_form
         from . import model as rm
 
         m = rm.model()
         applied = torque.expressions() if torque is not None else [0, 0, 0]
         generic = m.euler_rhs_generic.subs(dict(zip(rm.tau_symbols, applied)), simultaneous=True)
-        wdot = _gyroscopic(m.in_quaternion(generic), rm.omega_symbols())
+        wdot = gyroscopic_form(m.in_quaternion(generic), rm.omega_symbols())
         rhs = [*wdot, *m.quaternion_rhs]
         state = list(rm.state())
         if timed:
