@@ -62,3 +62,41 @@ def test_at_is_required_and_only_with_linearization(scene, capsys):
     assert "expected --at" in capsys.readouterr().err
     assert main(["derive", scene, "energy", "--at", "theta=0"]) == 2
     assert "--at: expected with QUANTITY linearization only" in capsys.readouterr().err
+
+
+HEAVY_MGL = """\
+system = "heavy_top"
+[parameters]
+I1 = 1.0
+I3 = 0.5
+Mgl = 1.0
+[initial]
+theta = 0.0
+phi = 0.0
+psi = 0.0
+theta_dot = 0.0
+phi_dot = 0.0
+psi_dot = 5.0
+[time]
+t_end = 1.0
+samples = 2
+[output]
+quantities = ["theta"]
+"""
+
+
+@pytest.mark.parametrize("spin", [5.0, 3.0])
+def test_sleeping_top_given_with_mgl(tmp_path, capsys, spin):
+    """(3.83) by hand: a = I3 ω3 / I1, α = 2 M g l / I1, u2 = a²/α − 1; the nutation about θ = 0 has
+    ω² = (u2 − 1) M g l / (2 I1) — stable above I3 ω3 = 2 √(I1 M g l) (ω3 = 4 here), growing below."""
+    path = tmp_path / "sleeping.toml"
+    path.write_text(HEAVY_MGL)
+    assert main(["derive", str(path), "linearization", "--parameters", "--at",
+                 f"theta=0, phi_dot=0, psi_dot={spin}", "--format", "json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    a, alpha = 0.5 * spin / 1.0, 2.0 * 1.0 / 1.0
+    w2 = (a**2 / alpha - 2.0) * 1.0 / 2.0
+    if w2 > 0:
+        assert out["stable"] is True and out["frequencies"] == [pytest.approx(math.sqrt(w2), rel=1e-12)]
+    else:
+        assert out["stable"] is False and out["growth_rates"] == [pytest.approx(math.sqrt(-w2), rel=1e-12)]

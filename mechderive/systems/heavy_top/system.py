@@ -623,6 +623,13 @@ class HeavyTop(System):
 
         return check_system()
 
+    def parameter_values(self, parameters: Mapping[str, Any]) -> dict[str, float]:
+        """I1 I3 M g l; a scene given with ``Mgl`` as M = Mgl, g = l = 1 (only the product enters (3.62)'s motion)."""
+        values = super().parameter_values(parameters)
+        if "Mgl" in values:
+            values.update(M=values.pop("Mgl"), g=1.0, l=1.0)
+        return values
+
     def lagrangian_model(self) -> tuple:
         """(L (3.62) in the state symbols, (φ, θ, ψ), (φ̇, θ̇, ψ̇), (I1, I3, M, g, l)) for the generic
         linearization (the sleeping top's criterion (3.83) about θ = 0)."""
