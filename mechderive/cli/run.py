@@ -204,6 +204,7 @@ def _quantities(name: str) -> None:
         print(f"{name}: the quantities depend on the scene's definition ({', '.join(system.extra_keys)})")
         return
     width = max(len(q.name) for q in quantities)
-    units = max(len(q.unit or "1") for q in quantities)
+    # a quantity without a unit is one the system cannot know it of (a user's Lagrangian): "-", not "1"
+    units = max(len(q.unit or "-") for q in quantities)
     for q in quantities:
-        print(f"{q.name:<{width}}  {q.unit or '1':<{units}}  {q.meaning}")
+        print(f"{q.name:<{width}}  {q.unit or '-':<{units}}  {q.meaning}")
