@@ -48,6 +48,10 @@ def add_parser(sub: "argparse._SubParsersAction") -> None:
     p.add_argument("system", metavar="SYSTEM", help="a system of the registry, or a scene file "
                                                     "ending .toml")
     p.add_argument("claim", metavar="CLAIM", nargs="?", help="the claim 'LHS = RHS'")
+    p.add_argument("--file", metavar="FILE", default=None,
+                   help="check every claim of FILE in one process: one per line, blank lines and # comments "
+                        f"ignored, at most {MAX_FILE_CLAIMS} claims ('-' reads standard input); a summary "
+                        "follows, and the exit status is that of the worst verdict")
     p.add_argument("--given", metavar="'NAME = EXPR'", action="append", default=[],
                    help="define a new name, or specialise a state variable or parameter (repeatable)")
     p.add_argument("--symbols", action="store_true", help="list the system's symbols with their meanings")
@@ -65,6 +69,72 @@ def add_parser(sub: "argparse._SubParsersAction") -> None:
     p.add_argument("--any-moments", action="store_true",
                    help="draw the parameters independently (any positive values), not only real bodies")
     p.set_defaults(run=run)
+
+
+#: Claims a ``--file`` may hold: each is decided within its own --budget, so 1000 take at most ~1.4 hours.
+MAX_FILE_CLAIMS = 1000
+#: The exit status of a run of claims is the worst one: false (1) before undecided (3) before holds (0).
+_SEVERITY = {0: 0, 3: 1, 1: 2, 2: 3}
+
+
+def _claims_of(source: str) -> list[tuple[int, str]]:
+    """(line number, claim) of a claims file read as data (never evaluated): ``#`` starts a comment."""
+    if source == "-":
+        text = sys.stdin.read(1_000_001)
+        if len(text) > 1_000_000:
+            raise InvalidInputError("--file -: expected at most 1000000 characters, got more")
+    else:
+        from pathlib import Path
+
+        from ..scenes.schema import _read_file
+
+        try:
+            text = _read_file(Path(source), repr(source))
+        except InvalidInputError as exc:
+            raise InvalidInputError("--file " + str(exc).removeprefix("scene ")) from None
+    claims = [(n, line.split("#", 1)[0].strip()) for n, line in enumerate(text.splitlines(), 1)]
+    claims = [(n, c) for n, c in claims if c]
+    if not claims:
+        raise InvalidInputError(f"--file {source!r}: expected at least one claim (one per line), got none")
+    if len(claims) > MAX_FILE_CLAIMS:
+        raise InvalidInputError(f"--file {source!r}: expected at most {MAX_FILE_CLAIMS} claims, got {len(claims)}")
+    return claims
+
+
+def _run_file(args: argparse.Namespace, system, given: list[str]) -> int:
+    """Decide every claim of ``--file``; one line per claim (or a JSON list), then the counts."""
+    import time
+
+    from ..formulas import check
+
+    start, records, worst = time.perf_counter(), [], 0
+    for line, claim in _claims_of(args.file):
+        try:
+            v = check(claim, system, given=given, points=args.points, seed=args.seed, budget=args.budget,
+                      any_moments=args.any_moments)
+            record = {"line": line, "claim": claim, **v.as_dict()}
+            status = v.exit_status
+        except InvalidInputError as exc:  # this line only: the others are still decided
+            record = {"line": line, "claim": claim, "verdict": "error", "method": "none",
+                      "detail": _on_the_command_line(str(exc))}
+            status = 2
+        worst = max(worst, status, key=_SEVERITY.__getitem__)
+        records.append(record)
+        if not args.json:
+            print(f"{line:>4}  {record['verdict']:<9} {claim}")
+            if record["verdict"] not in ("identity", "on-shell"):
+                print(f"        {record['detail']}")
+    counts: dict[str, int] = {}
+    for r in records:
+        counts[r["verdict"]] = counts.get(r["verdict"], 0) + 1
+    seconds = time.perf_counter() - start
+    if args.json:
+        json.dump({"claims": records, "summary": counts, "seconds": round(seconds, 3)}, sys.stdout, indent=1,
+                  ensure_ascii=False)
+        print()
+    else:
+        print(f"{len(records)} claims in {seconds:.2f} s: " + ", ".join(f"{n} {k}" for k, n in counts.items()))
+    return worst
 
 
 def _print_symbols(system, as_json: bool) -> None:
@@ -140,8 +210,12 @@ def run(args: argparse.Namespace) -> int:
             given += _scene_givens(system, parameters, given)
         if args.symbols:
             _print_symbols(system, args.json)
-            if args.claim is None:
+            if args.claim is None and args.file is None:
                 return 0
+        if args.file is not None:
+            if args.claim is not None:
+                raise InvalidInputError(f"--file: expected either a CLAIM or --file, got both (CLAIM {args.claim!r})")
+            return _run_file(args, system, given)
         if args.claim is None:
             raise InvalidInputError("CLAIM: expected a claim like 'dt(E) = 0' (or --symbols), got none")
         verdict = check(args.claim, system, given=given, points=args.points, seed=args.seed,
