@@ -157,6 +157,9 @@ class System:
     bytes_per_sample: int = 600
     #: the quantities :meth:`plot` draws from (``mechderive run --plot`` solves them too)
     plot_quantities: tuple[str, ...] = ()
+    #: the per-motion quantities a scene may ask for in ``[output] summary = [...]`` (turning angles,
+    #: periods, invariants' values), each with its unit and meaning; :meth:`summarize` computes them
+    summaries: tuple[Quantity, ...] = ()
 
     # --- the scene schema -------------------------------------------------------------------------
 
@@ -199,6 +202,36 @@ class System:
     def drift(self, scene: "Scene", solved: Solved, t: "np.ndarray") -> dict[str, "Drift"]:
         """The drift of each conserved quantity along the solution, each against a scale of the motion."""
         return {}
+
+    # --- per-motion quantities ------------------------------------------------------------------
+
+    def summary_names(self) -> tuple[str, ...]:
+        return tuple(q.name for q in self.summaries)
+
+    def summarize(self, scene: "Scene", solved: Solved, t: "np.ndarray",
+                  names: tuple[str, ...]) -> dict[str, tuple[Any, float | None]]:
+        """The per-motion quantities ``names`` (each one of :attr:`summaries`) of the solved motion.
+
+        Returns {name: (value, error estimate)}, in the order of ``names``.  A value is a float, a
+        string (a motion's class), a bool, or a dict of those (``steady``: its kind and rates; a free
+        top's ``stability`` per axis); None where the quantity does not apply to this motion (a
+        ``minimum_spin`` of a top that is not sleeping), with the reason as a string in its place
+        of the estimate.  The estimate is measured (the closed form's own residual or conditioning,
+        the spread of the trajectory's measurements), never a constant; None where none can be
+        measured.  Computed from the closed form where the system has one, else measured on the
+        trajectory (``solved.solution``); ``scene``, ``solved`` and ``t`` are in the solver's units
+        (the planner converts each value back by its :attr:`Quantity.scales_as`).
+        """
+        if names:
+            raise InvalidInputError(f"system {self.name!r} has no per-motion quantities "
+                                    f"(asked for {', '.join(names)})")
+        return {}
+
+    def period(self, scene: "Scene") -> float | None:
+        """The period (s) of the scene's motion, known before solving — the heavy top's nutation period,
+        the free top's polhode period — for ``[time] samples_per_period``; None where the system cannot
+        know it in advance."""
+        return None
 
     # --- derive, check, plot ----------------------------------------------------------------------
 
@@ -246,6 +279,13 @@ class System:
         """Draw ``result`` (a :class:`~mechderive.scenes.planner.RunResult`) on ``figure``; False where the
         system has no picture of its own (the generic plot of the columns against t is used)."""
         return False
+
+    def motion_geometry(self, result: Any) -> Any:
+        """What ``mechderive run --animate`` draws of ``result`` (a
+        :class:`~mechderive.scenes.planner.RunResult`): a
+        :class:`mechderive.systems.figures.MotionGeometry` (the body's orientation, shape and
+        moments, L and ω, the traces), or None where the system has no body to draw."""
+        return None
 
     def example_scene(self) -> str:
         """A complete scene file (TOML) of this system: the default of ``mechderive run``'s built-ins."""
