@@ -113,10 +113,15 @@ def test_the_built_in_scenes_are_the_same_nine():
 def test_scenes_quantities_prints_each_with_unit_and_meaning(name, capsys):
     assert main(["scenes", "--quantities", name]) == 0
     lines = capsys.readouterr().out.splitlines()
-    quantities = registry.get(name).quantities
-    assert len(lines) == len(quantities)
-    for line, q in zip(lines, quantities):
-        assert re.fullmatch(rf"{q.name} +{re.escape(q.unit)} +{re.escape(q.meaning)}", line), line
+    system = registry.get(name)
+    heads = ["[output].quantities (columns, one value per sample):"] + (
+        ["[output].summary (per-motion quantities, one value per run):"] if system.summaries else [])
+    assert [line for line in lines if not line.startswith("  ")] == heads
+    listed = [line.strip() for line in lines if line.startswith("  ")]
+    described = system.quantities + system.summaries
+    assert len(listed) == len(described)
+    for line, q in zip(listed, described):
+        assert re.fullmatch(rf"{q.name} +{re.escape(q.unit or '-')} +{re.escape(q.meaning)}", line), line
 
 
 def test_scenes_systems_lists_the_registry(capsys):
@@ -211,9 +216,9 @@ def test_a_registered_system_runs_end_to_end(oscillator, tmp_path, capsys):
     assert main(["run", str(path), "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["system"] == "test_oscillator"
     assert main(["scenes", "--quantities", "test_oscillator"]) == 0
-    assert capsys.readouterr().out.splitlines()[0].split()[:2] == ["x", "m"]
+    assert capsys.readouterr().out.splitlines()[1].split()[:2] == ["x", "m"]
     assert main(["scenes", "--quantities", str(path)]) == 0  # a scene file: its system as it defines it
-    assert capsys.readouterr().out.splitlines()[1].split()[:2] == ["energy", "J/kg"]
+    assert capsys.readouterr().out.splitlines()[2].split()[:2] == ["energy", "J/kg"]
     with pytest.raises(InvalidInputError, match=r"scene key \[parameters\]\.k: expected a number > 0, got -1"):
         load_scene(SCENE.replace("k = 4.0", "k = -1"))
     with pytest.raises(InvalidInputError, match=r"scene table \[initial\]: missing; system 'test_oscillator' "

@@ -20,7 +20,8 @@ def add_parsers(sub: "argparse._SubParsersAction") -> None:
         "omitted) and write the requested quantities.  Without -o, prints a summary.",
     )
     p.add_argument("scene", nargs="?", default=None, help="scene file (.toml) or built-in name (see `mechderive scenes`)")
-    p.add_argument("-o", "--output", metavar="OUT", help="write the table to OUT.csv or OUT.npz")
+    p.add_argument("-o", "--output", metavar="OUT", help="write the table to OUT.csv or OUT.npz (and the scene's "
+                   "[output].summary to OUT.summary.json beside it)")
     p.add_argument("--json", action="store_true", help="print the run's report as JSON")
     p.add_argument("--plot", metavar="PNG", help="draw the motion to PNG (needs the `plot` extra: matplotlib)")
     p.add_argument("--no-cache", action="store_true", help="do not read or write the disk cache of compiled code")
@@ -71,10 +72,11 @@ def _load(spec: str | None):
 
 def _check_targets(args: argparse.Namespace) -> None:
     """Refuse an output or plot file that could not be written before solving, not after."""
-    from ..scenes.output import TABLE_SUFFIXES, check_output_path
+    from ..scenes.output import TABLE_SUFFIXES, check_output_path, summary_path
 
     if args.output:
         check_output_path(args.output, TABLE_SUFFIXES, what="-o")
+        check_output_path(summary_path(args.output), (".json",), what="-o's summary file")
     if args.plot:
         import importlib.util
 
@@ -114,6 +116,11 @@ def run(args: argparse.Namespace) -> int:
             from ..scenes.output import write_table
 
             write_table(args.output, result.t, columns, what="-o")
+            if scene.summary:
+                from ..scenes.output import summary_path, write_summary
+
+                write_summary(summary_path(args.output), result.report, _summary_units(scene),
+                              what="-o's summary file")
         if args.plot:
             from ..scenes.plot import plot_result
 
@@ -144,6 +151,8 @@ def _summary(scene, result, report, args) -> None:
     print("  drift of conserved quantities: " + ", ".join(f"{k} {v:.2g}" for k, v in report["drift"].items()))
     if report.get("note"):
         print(f"  note: {report['note']}")
+    if scene.summary:
+        _print_summary(scene, report)
     timing = report["timings"]
     print("  seconds: " + ", ".join(f"{k} {v:.3f}" for k, v in timing.items()))
     fresh = sum(not c.endswith("(disk)") for c in report["compiled"])
@@ -157,8 +166,46 @@ def _summary(scene, result, report, args) -> None:
         print(f"{t[i]:10.4f}" + "".join(f" {result.columns[n][i]:{width + 6}.12g}" for n in names))
     if args.output:
         print(f"\nwrote {args.output}")
+        if scene.summary:
+            from ..scenes.output import summary_path
+
+            print(f"wrote {summary_path(args.output)}")
     if args.plot:
         print(f"drew {args.plot}")
+
+
+def _summary_units(scene) -> dict[str, str]:
+    """{name: SI unit} of the scene's per-motion quantities ("" where the system does not know it)."""
+    units = {q.name: q.unit for q in scene.model.summaries}
+    return {name: units.get(name, "") for name in scene.summary}
+
+
+def _shown_value(value, unit: str) -> str:
+    """A per-motion value as the summary prints it: numbers to 12 digits with their unit, tables inline."""
+    if isinstance(value, bool) or value is None or isinstance(value, str):
+        return str(value)
+    if isinstance(value, (int, float)):
+        unit = "" if unit in ("", "1") else f" {unit}"
+        return f"{value:.12g}{unit}"
+    if isinstance(value, dict):
+        return "{" + ", ".join(f"{k}: {_shown_value(v, '')}" for k, v in value.items()) + "}"
+    return str(value)
+
+
+def _print_summary(scene, report) -> None:
+    """The scene's per-motion quantities, one per line: value, unit, and the measured estimate (or why not)."""
+    units = _summary_units(scene)
+    width = max(len(n) for n in scene.summary)
+    print("  per-motion quantities:")
+    for name in scene.summary:
+        value, error = report["summary"][name], report["summary_error"][name]
+        if isinstance(error, str):
+            extra = f"  ({error})"
+        elif isinstance(error, (int, float)) and not isinstance(error, bool):
+            extra = f"  (± {error:.2g})"
+        else:
+            extra = ""
+        print(f"    {name:<{width}} = {_shown_value(value, units[name])}{extra}")
 
 
 def scenes(args: argparse.Namespace) -> int:
@@ -199,12 +246,17 @@ def _quantities(name: str) -> None:
         system = _load(name).model  # a family (lagrangian) as the scene defines it
     else:
         system = registry.get(name)
-    quantities = system.quantities
+    quantities, summaries = system.quantities, system.summaries
     if not quantities:
         print(f"{name}: the quantities depend on the scene's definition ({', '.join(system.extra_keys)})")
         return
-    width = max(len(q.name) for q in quantities)
+    width = max(len(q.name) for q in quantities + summaries)
     # a quantity without a unit is one the system cannot know it of (a user's Lagrangian): "-", not "1"
-    units = max(len(q.unit or "-") for q in quantities)
+    units = max(len(q.unit or "-") for q in quantities + summaries)
+    print("[output].quantities (columns, one value per sample):")
     for q in quantities:
-        print(f"{q.name:<{width}}  {q.unit or '-':<{units}}  {q.meaning}")
+        print(f"  {q.name:<{width}}  {q.unit or '-':<{units}}  {q.meaning}")
+    if summaries:
+        print("[output].summary (per-motion quantities, one value per run):")
+        for q in summaries:
+            print(f"  {q.name:<{width}}  {q.unit or '-':<{units}}  {q.meaning}")

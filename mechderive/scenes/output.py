@@ -512,3 +512,29 @@ def report_json(report: Mapping[str, Any]) -> str:
     if not isinstance(report, Mapping):
         raise InvalidInputError(f"expected the report to be a mapping, got {type(report).__name__}")
     return json.dumps(_plain(report, ""), sort_keys=True, indent=2, ensure_ascii=False, allow_nan=False)
+
+
+def summary_path(table: str | os.PathLike) -> Path:
+    """Where ``-o OUT.csv`` (or ``.npz``) puts the scene's per-motion quantities: ``OUT.summary.json`` beside it."""
+    path = Path(table)
+    return path.with_name(path.stem + ".summary.json")
+
+
+def write_summary(path: str | os.PathLike, report: Mapping[str, Any], units: Mapping[str, str], *,
+                  what: str = "summary file") -> Path:
+    """Write a run's per-motion quantities to ``path`` (JSON, written as :func:`atomic_output` says).
+
+    The file holds ``summary`` ({name: value}), ``summary_error`` ({name: error estimate, or the reason a
+    quantity does not apply}) and ``units`` ({name: SI unit}), as the ``--json`` report does, plus the
+    run's ``system``, ``method`` and ``error_estimate`` so that the file stands on its own.
+    """
+    import json
+
+    path = check_output_path(path, (".json",), what=what)
+    content = {"system": report.get("system"), "method": report.get("method"),
+               "error_estimate": report.get("error_estimate"),
+               "summary": report.get("summary", {}), "summary_error": report.get("summary_error", {}),
+               "units": dict(units)}
+    text = json.dumps(_plain(content, ""), sort_keys=True, indent=2, ensure_ascii=False, allow_nan=False) + "\n"
+    _write_atomically(path, lambda f: f.write(text.encode("utf-8")), what)
+    return path

@@ -46,6 +46,7 @@ A solver's own refusal is prefixed with the scene keys its message mentions.
 
 from __future__ import annotations
 
+import math
 import re
 import time
 from dataclasses import dataclass, field
@@ -56,11 +57,11 @@ import numpy as np
 from ..core import cbuild, codecache
 from ..core.model import derivation_log, derivation_seconds
 from ..errors import InvalidInputError, MechDeriveError
-from ..systems.base import OutOfReach, Solved
+from ..systems.base import OutOfReach, Quantity, Solved
 from .schema import Scene, waived
 from ..systems.scaling import Scaled, check_samples, in_scene_units, scale_scene, solving_in
 
-__all__ = ["RunResult", "run_scene"]
+__all__ = ["RunResult", "run_scene", "summarize"]
 
 
 @dataclass
@@ -165,6 +166,9 @@ def run_scene(scene: Scene) -> RunResult:
     solve_compile_s = sum(s for _, _, s in compiled_since())
     cols, info, solution = dict(solved.columns), dict(solved.info), solved.solution
     drifts = scene.model.drift(work, Solved(solved.columns, info, solution), t_work)
+    summary_start = time.perf_counter()
+    summary, summary_error = summarize(scene, scaled, Solved(solved.columns, info, solution), t_work)
+    summary_s = time.perf_counter() - summary_start
     cols = in_scene_units(scaled, cols)
     if info.get("error_estimate") is not None:
         for q in scaled.offsets:
@@ -211,7 +215,8 @@ def run_scene(scene: Scene) -> RunResult:
         "timings": {"derive": round(derive_s, 6), "compile": round(compile_s, 6),
                     "solve": round(max(solve_end - start - solve_derive_s - solve_compile_s, 0.0), 6),
                     "drift_check": round(max(total - (solve_end - start) - (derive_s - solve_derive_s)
-                                             - (compile_s - solve_compile_s), 0.0), 6)},
+                                             - (compile_s - solve_compile_s) - summary_s, 0.0), 6),
+                    **({"summary": round(summary_s, 6)} if scene.summary else {})},
         "error_estimate": info.pop("error_estimate", None),
         "drift": {k: d.value for k, d in drifts.items()},
         "drift_relative_to": {k: d.relative_to for k, d in drifts.items()},
@@ -221,11 +226,63 @@ def run_scene(scene: Scene) -> RunResult:
         "waived": let_through,
         "details": info,
     }
+    if scene.summary:
+        report["summary"] = summary
+        report["summary_error"] = summary_error
     if not scaled.identity:
         report["units"] = _units_note(scaled)
     if rtol_reason is not None:
         report["rtol_met_reason"] = rtol_reason
     return RunResult(scene=scene, t=t, columns=cols, report=report, solution=solution)
+
+
+def summarize(scene: Scene, scaled: Scaled, solved: Solved, t: np.ndarray) -> tuple[dict, dict]:
+    """({name: value}, {name: error estimate}) of the scene's ``[output].summary``, in the scene's units.
+
+    The system computes each in its solver's units (:meth:`~mechderive.systems.base.System.summarize`);
+    a scene solved in units of its own motion gets each number back by the power of two its quantity
+    scales with (a column's own exponent where the name is a column's, else by ``scales_as``: a time,
+    a rate, an angle).  A value that is not a plain number (a class, a table of rates) cannot be brought
+    back by one power of two: there it is None, and its estimate says why — never a value in the wrong units.
+    A quantity that does not apply to this motion is None with the reason as its "estimate".
+    """
+    if not scene.summary:
+        return {}, {}
+    model = scene.model
+    try:
+        computed = model.summarize(scaled.scene, solved, t, tuple(scene.summary))
+    except MechDeriveError as exc:
+        raise _scene_error(scene, exc) from exc
+    missing = [n for n in scene.summary if n not in computed]
+    if missing:
+        raise InvalidInputError(f"system {scene.system!r} did not compute the per-motion quantities "
+                                f"{', '.join(missing)} it lists")
+    kinds = {q.name: q for q in model.summaries}
+    values, errors = {}, {}
+    for name in scene.summary:
+        value, error = computed[name]
+        if not scaled.identity and value is not None and not isinstance(value, (str, bool)):
+            e = _summary_exponent(scaled, name, kinds.get(name))
+            if e is None or not isinstance(value, (int, float)):
+                value, error = None, (f"not available for a scene solved in units of its own motion "
+                                      f"({_units_note(scaled)}): {name} is not a number scaled by a power of two")
+            else:
+                value = math.ldexp(float(value), e)
+                if isinstance(error, (int, float)):
+                    error = math.ldexp(float(error), e)
+        values[name], errors[name] = value, error
+    return values, errors
+
+
+def _summary_exponent(scaled: Scaled, name: str, quantity: Quantity | None) -> int | None:
+    """e with value (scene units) = value (solver units)·2^e, or None where it is not one power of two."""
+    if name in scaled.columns:
+        return scaled.columns[name]
+    if quantity is None:
+        return None
+    if quantity.scales_as == "" and quantity.unit in ("rad", "1"):
+        return 0  # an angle or a pure number (u = cos θ) does not change with the units of time and mass
+    return {"time": -scaled.time, "rate": scaled.rate, "angle": 0}.get(quantity.scales_as)
 
 
 def _units_note(scaled: Scaled) -> str:

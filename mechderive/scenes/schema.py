@@ -29,6 +29,8 @@ The format (optional keys marked)::
     [output]
     quantities = ["theta", "phi", "psi"]   # names from QUANTITIES[system], each once
                                            # (`mechderive scenes --quantities SYSTEM` lists them)
+    summary = ["nutation_period", "theta_min"]   # optional: per-motion quantities of the system,
+                                           # each once (listed by the same command)
 
     coordinates = [...]       # a system's own top-level keys and tables (its ``extra_keys``), if any
 
@@ -144,6 +146,8 @@ DEFAULT_STRICT = True
 TABLES = ("parameters", "initial", "time", "output")
 TIME_KEYS = ("t_end", "samples")
 OUTPUT_KEYS = ("quantities",)
+#: optional keys of [output]: ``summary``, the per-motion quantities (turning angles, periods, invariants)
+OUTPUT_OPTIONAL_KEYS = ("summary",)
 
 
 class _Quantities(Mapping):
@@ -204,6 +208,26 @@ def _quantity_list(system: str, value: Any, allowed: tuple[str, ...]) -> tuple[s
                                     f"expected one of {_one_of(allowed)}")
         if q in seen:
             raise InvalidInputError(f"scene key {where}: duplicate quantity {q!r}; each may appear once")
+        seen.add(q)
+    return tuple(value)
+
+
+def _summary_list(system: str, value: Any, allowed: tuple[str, ...]) -> tuple[str, ...]:
+    """``[output].summary``: a list (possibly empty) of the system's per-motion quantity names, each once."""
+    if not isinstance(value, (list, tuple)):
+        _fail("[output].summary", "a list of per-motion quantity names (for "
+              f"{system}: {_one_of(allowed) if allowed else 'none'})", value)
+    seen: set[str] = set()
+    for i, q in enumerate(value):
+        where = f"[output].summary[{i}]"
+        if not isinstance(q, str):
+            _fail(where, "a per-motion quantity name (a string)", q)
+        if q not in allowed:
+            expected = f"one of {_one_of(allowed)}" if allowed else "none: this system has no per-motion quantities"
+            raise InvalidInputError(f"scene key {where}: unknown per-motion quantity {_show(q)} for system "
+                                    f"{system!r}; expected {expected}")
+        if q in seen:
+            raise InvalidInputError(f"scene key {where}: duplicate per-motion quantity {q!r}; each may appear once")
         seen.add(q)
     return tuple(value)
 
@@ -292,6 +316,8 @@ class Scene:
     strict: bool = DEFAULT_STRICT
     #: the system's own top-level keys and tables (its ``extra_keys``: a ``lagrangian``'s ``coordinates``, ...)
     definition: Mapping[str, Any] = field(default_factory=dict)
+    #: the per-motion quantities asked for (``[output].summary``), each one of the system's ``summaries``
+    summary: tuple = ()
     #: the concrete system (:class:`~mechderive.systems.base.System`) this scene runs, set on construction
     model: Any = field(default=None, compare=False, repr=False)
 
@@ -319,6 +345,7 @@ class Scene:
             _fail("[time].samples", f"an integer in [2, {MAX_SAMPLES}]", self.samples)
         set_(self, "samples", int(self.samples))
         set_(self, "quantities", _quantity_list(self.system, self.quantities, model.quantity_names()))
+        set_(self, "summary", _summary_list(self.system, self.summary, model.summary_names()))
         _check_size(self)
 
     @property
@@ -373,14 +400,14 @@ method, rtol, strict and tables [parameters], [initial], [time], [output]
     time, output = mapping["time"], mapping["output"]
     _check_keys(time, "time", TIME_KEYS, TIME_KEYS, "key")
     out_keys = OUTPUT_KEYS + (("expressions",) if "output.expressions" in extra else ())
-    _check_keys(output, "output", out_keys, OUTPUT_KEYS, "key")
+    _check_keys(output, "output", out_keys + OUTPUT_OPTIONAL_KEYS, OUTPUT_KEYS, "key")
     definition = {k: mapping[k] for k in extra if k in mapping and not k.startswith("output.")}
     if "output.expressions" in extra and "expressions" in output:
         definition["output.expressions"] = output["expressions"]
     return Scene(system=system.name, method=mapping.get("method", DEFAULT_METHOD),
                  rtol=mapping.get("rtol", DEFAULT_RTOL), parameters=mapping.get("parameters", {}),
                  initial=mapping.get("initial", {}), t_end=time["t_end"], samples=time["samples"],
-                 quantities=output["quantities"], name=name if name is not None else mapping.get("name"),
+                 quantities=output["quantities"], summary=output.get("summary", ()), name=name if name is not None else mapping.get("name"),
                  strict=mapping.get("strict", DEFAULT_STRICT), definition=definition)
 
 
@@ -596,7 +623,9 @@ def scene_to_toml(scene: Scene) -> str:
     lines += [f"{k} = {_toml_value(v)}" for k, v in scene.definition.items() if k not in own]
     for table, content in (("parameters", scene.parameters), ("initial", scene.initial),
                            ("time", {"t_end": scene.t_end, "samples": scene.samples}),
-                           ("output", {"quantities": scene.quantities}), *own.items()):
+                           ("output", {"quantities": scene.quantities,
+                                       **({"summary": scene.summary} if scene.summary else {})}),
+                           *own.items()):
         if content:
             lines += ["", f"[{table}]"] + [f"{_toml_key(k)} = {_toml_value(v)}" for k, v in content.items()]
     return "\n".join(lines) + "\n"
