@@ -126,6 +126,8 @@ class _Closed:
         self.th0, self.thd0, self.phd0, self.psd0 = (mpf(s[k]) for k in ("theta", "theta_dot", "phi_dot", "psi_dot"))
         self.w3 = self.psd0 + self.phd0 * mpmath.cos(self.th0)  # ω3 (3.63)
         self.steady = sol.kind == "steady"
+        # a uniform precession given in doubles nutates by ~1e-17: figure 44's class (u2 - u1 ≤ 1e-12) says steady
+        self.steady_motion = self.steady or sol.motion_class == "uniform precession"
         self._memo: dict[str, Pair] = {}
 
     def of(self, name: str) -> Pair:
@@ -275,8 +277,8 @@ class _Closed:
     def _steady(self) -> Pair:
         mp, sol = self.mp, self.sol
         w3, w3_err = _rounding(self.w3)
-        if not self.steady:
-            return {"kind": "none"}, 0.0
+        if not self.steady_motion:
+            return {"kind": "none"}, None
         th0 = sol.initial["theta"]
         if self._sleeping():
             ms, ms_err = _rounding(self._minimum_spin_mp())
@@ -355,33 +357,40 @@ class _Measured:
             return float(col[0]), float(np.max(np.abs(col - col[0])))
         return None, f"{self.why}; {name} is not measured on the integrated trajectory"
 
-    def _peaks(self, sign: float) -> list[tuple[float, float, float]]:
-        """(t, θ, |refinement|) of each interior local extreme of sign·θ, refined by a parabola."""
+    @staticmethod
+    def _vertex(t: np.ndarray, y: np.ndarray, i: int, k: int) -> tuple[float, float] | None:
+        """(t, y) of the vertex of the parabola through the samples i - k, i, i + k, or None if not a maximum."""
+        h0, h1 = t[i] - t[i - k], t[i + k] - t[i]
+        d0, d1 = (y[i] - y[i - k]) / h0, (y[i + k] - y[i]) / h1
+        curv = (d1 - d0) / (h0 + h1)  # half y'' of the parabola
+        if not curv < 0:
+            return None
+        slope = (d0 * h1 + d1 * h0) / (h0 + h1)  # the parabola's slope at t_i
+        dt = -slope / (2 * curv)
+        return t[i] + dt, y[i] + slope * dt + curv * dt * dt
+
+    def _peaks(self, sign: float) -> list[tuple[float, float, float, float]]:
+        """(t, θ, error of t, error of θ) of each interior local extreme of sign·θ: the vertex of the parabola
+        through the sample and its neighbours, its error measured against that through the next-but-one
+        samples (whose error, O(h²) larger by 4, bounds the narrow one's)."""
         y, t = sign * self.theta, self.t
         out = []
-        for i in range(1, len(y) - 1):
+        for i in range(2, len(y) - 2):
             if y[i] >= y[i - 1] and y[i] > y[i + 1]:
-                h0, h1 = t[i] - t[i - 1], t[i + 1] - t[i]
-                d0, d1 = (y[i] - y[i - 1]) / h0, (y[i + 1] - y[i]) / h1
-                curv = (d1 - d0) / (h0 + h1)  # half y'' of the parabola
-                if curv < 0:
-                    # vertex of y = y[i] + s (t - t_i) + curv (t - t_i)², s the slope at t_i
-                    slope = (d0 * h1 + d1 * h0) / (h0 + h1)
-                    dt = -slope / (2 * curv)
-                    peak = y[i] + slope * dt + curv * dt * dt
-                    out.append((t[i] + dt, sign * peak, abs(peak - y[i])))
+                narrow, wide = self._vertex(t, y, i, 1), self._vertex(t, y, i, 2)
+                if narrow is not None and wide is not None:
+                    out.append((narrow[0], sign * narrow[1], abs(narrow[0] - wide[0]), abs(narrow[1] - wide[1])))
         return out
 
     def _extreme(self, largest: bool) -> Pair:
         sign = 1.0 if largest else -1.0
         peaks = self._peaks(sign)
-        i = int(np.argmax(sign * self.theta))
         if not peaks:
             return None, f"{self.why}; θ reaches no interior {'maximum' if largest else 'minimum'} in the samples"
         best = max(peaks, key=lambda p: sign * p[1])
-        value = best[1] if sign * best[1] >= sign * self.theta[i] else float(self.theta[i])
-        spread = max(p[2] for p in peaks)  # the largest refinement: the sampling's resolution of the extreme
-        return float(value), spread + self.own
+        # the other extremes are the same turning point again: their spread is measured too
+        spread = max(abs(p[1] - best[1]) for p in peaks)
+        return float(best[1]), best[3] + spread + self.own
 
     def _period(self) -> Pair:
         peaks = self._peaks(1.0)
@@ -390,6 +399,5 @@ class _Measured:
         times = np.array([p[0] for p in peaks])
         gaps = np.diff(times)
         mean = float((times[-1] - times[0]) / (len(times) - 1))
-        # the spread of the maxima's spacings; with one spacing only, the sample step bounds it
-        spread = float(np.max(np.abs(gaps - mean))) if len(gaps) > 1 else float(np.max(np.diff(self.t)))
-        return mean, spread
+        timing = (peaks[0][2] + peaks[-1][2]) / (len(times) - 1)
+        return mean, float(np.max(np.abs(gaps - mean))) + timing
