@@ -24,6 +24,7 @@ from ...errors import InvalidInputError
 from ..base import Key, OutOfReach, Quantity, Solved, System
 from ..scene_keys import (SCENE_STRICT_HINT, at, check_keys, number, one_of, rename_keys)
 from . import parameters as heavy_top_parameters
+from .summary import SUMMARIES
 
 if TYPE_CHECKING:  # pragma: no cover
     from ...core.drift import Drift
@@ -543,6 +544,7 @@ class HeavyTop(System):
     #: integration, one quantity and all
     bytes_per_sample = 600
     plot_quantities = ("theta", "apex_x", "apex_y", "apex_z")
+    summaries = SUMMARIES
 
     def check_parameters(self, given: Mapping[str, Any], *, strict: bool = True) -> dict[str, Any]:
         """I1, I3 and M g l (or Mgl) > 0 and, unless ``strict`` is False, I1 - M l² ≥ I3/2 (a body's);
@@ -586,6 +588,20 @@ class HeavyTop(System):
 
     def solve(self, scene: "Scene", method: str, t: np.ndarray) -> Solved:
         return _exact(scene, t) if method == "exact" else _integrate(scene, t)
+
+    def summarize(self, scene: "Scene", solved: Solved, t: np.ndarray,
+                  names: tuple[str, ...]) -> dict[str, tuple[Any, Any]]:
+        """Turning angles, roots of f (3.73), nutation period, mean precession, figure 44's class, the steady
+        motions (3.80), (3.83) and the invariants: see :mod:`.summary`."""
+        from .summary import summarize
+
+        return summarize(scene, solved, t, names)
+
+    def period(self, scene: "Scene") -> float | None:
+        """The nutation period 2K(m)/κ (s) from the closed form's setup; None where steady or out of its reach."""
+        from .summary import period
+
+        return period(scene)
 
     def drift(self, scene: "Scene", solved: Solved, t: np.ndarray) -> dict[str, "Drift"]:
         from ...core.drift import drift
