@@ -195,7 +195,7 @@ def test_scene_is_frozen():
     (heavy(initial={"psi_dot": None}), InvalidInputError,
      r"scene key \[initial\]\.psi_dot: missing; expected all of theta, phi, psi, theta_dot, phi_dot, psi_dot"),
     (heavy(time={"samples": None}), InvalidInputError,
-     r"scene key \[time\]\.samples: missing; expected all of t_end, samples"),
+     r"scene key \[time\]\.samples: missing; expected samples or samples_per_period"),
     (heavy(output={"quantities": None}), InvalidInputError,
      r"scene key \[output\]\.quantities: missing; expected all of quantities"),
     (heavy(parameters=None), InvalidInputError,

@@ -72,11 +72,10 @@ def _load(spec: str | None):
 
 def _check_targets(args: argparse.Namespace) -> None:
     """Refuse an output or plot file that could not be written before solving, not after."""
-    from ..scenes.output import TABLE_SUFFIXES, check_output_path, summary_path
+    from ..scenes.output import TABLE_SUFFIXES, check_output_path
 
     if args.output:
         check_output_path(args.output, TABLE_SUFFIXES, what="-o")
-        check_output_path(summary_path(args.output), (".json",), what="-o's summary file")
     if args.plot:
         import importlib.util
 
@@ -101,6 +100,10 @@ def run(args: argparse.Namespace) -> int:
         from ..scenes.output import check_free_space
 
         check_free_space(args.output, scene.samples, 1 + len(scene.quantities), what="-o")
+        if scene.summary:  # OUT.summary.json beside the table: refused before solving, like the table
+            from ..scenes.output import check_output_path, summary_path
+
+            check_output_path(summary_path(args.output), (".json",), what="-o's summary file")
     parse_s = time.perf_counter() - start
     solve_scene = scene
     if args.plot:
@@ -141,7 +144,7 @@ def run(args: argparse.Namespace) -> int:
 
 def _summary(scene, result, report, args) -> None:
     t = result.t
-    print(f"scene {scene.name or '(file)'}: {scene.system}, {scene.samples} samples on [0, {scene.t_end:g}] s, "
+    print(f"scene {scene.name or '(file)'}: {scene.system}, {scene.samples} samples on [{t[0]:g}, {t[-1]:g}] s, "
           f"method {report['method']}")
     for k, v in report.get("details", {}).items():
         if isinstance(v, (int, float, str)) and k != "evaluated":

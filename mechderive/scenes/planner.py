@@ -46,6 +46,7 @@ A solver's own refusal is prefixed with the scene keys its message mentions.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import re
 import time
@@ -142,12 +143,25 @@ def run_scene(scene: Scene) -> RunResult:
     start = time.perf_counter()
     derived0, compiled0, seconds0 = len(derivation_log()), len(codecache.compile_log()), derivation_seconds()
     built0 = len(cbuild.build_log())
-    t = np.linspace(0.0, scene.t_end, scene.samples)
+    t = scene.times()
     check_samples(scene, t)
     method, note = choose_method(scene)
-    scaled = scale_scene(scene)  # the system refuses here what no choice of units brings within the doubles
+    # The solvers start from the initial values at t = 0: output times from t_start > 0 (or an explicit
+    # list) are solved from 0 with the first sample dropped afterwards; the system sees a plain scene
+    # whose t_end is the last output time.
+    start_at_zero = t[0] != 0
+    t_solve = np.concatenate(([0.0], t)) if start_at_zero else t
+    plain = scene if scene.times_given is None and not scene.t_start and scene.samples_per_period is None else \
+        dataclasses.replace(scene, times_given=None, t_start=0.0, samples_per_period=None,
+                            t_end=float(t_solve[-1]), samples=len(t_solve))
+    scaled = scale_scene(plain)  # the system refuses here what no choice of units brings within the doubles
     work = scaled.scene
-    t_work = t if scaled.identity else np.linspace(0.0, work.t_end, work.samples)
+    if plain is scene and scaled.identity:
+        t_work = t
+    elif scaled.identity:
+        t_work = t_solve
+    else:  # exact: a power of two
+        t_work = np.ldexp(t_solve, scaled.time) if plain is not scene else np.linspace(0.0, work.t_end, work.samples)
 
     def compiled_since() -> list[tuple[str, str, float]]:
         # generated Python (lambdify) and generated C (the compiled steppers), each from memory, disk or new
@@ -165,6 +179,10 @@ def run_scene(scene: Scene) -> RunResult:
     solve_derive_s = derivation_seconds() - seconds0
     solve_compile_s = sum(s for _, _, s in compiled_since())
     cols, info, solution = dict(solved.columns), dict(solved.info), solved.solution
+    if start_at_zero:  # the launch at t = 0 was solved only to start from it
+        cols = {k: v[1:] for k, v in cols.items()}
+        solved = Solved(cols, info, solution)
+        t_work = t_work[1:]
     drifts = scene.model.drift(work, Solved(solved.columns, info, solution), t_work)
     summary_start = time.perf_counter()
     summary, summary_error = summarize(scene, scaled, Solved(solved.columns, info, solution), t_work)

@@ -22,9 +22,20 @@ The format (optional keys marked)::
     ...                       # free_top: omega = [w1, w2, w3] (body frame, rad/s), optional phi theta psi
 
     [time]
-    t_end = 10.0              # > 0
-    samples = 1001            # equally spaced on [0, t_end], both ends included; 2 <= samples <= 10^7,
+    t_end = 10.0              # > t_start
+    samples = 1001            # equally spaced on [t_start, t_end], both ends included; 2 <= samples <= 10^7,
                               # and the run at most MAX_RUN_BYTES (1 GB, below)
+    t_start = 0.0             # optional: the first output time, in [0, t_end) (default 0)
+    samples_per_period = 200  # instead of samples, for a system that knows its period before solving
+                              # (the heavy top's nutation, the free top's polhode): samples =
+                              # ceil((t_end - t_start) / period × N) + 1
+    # or, instead of all of these:
+    times = [0.0, 0.5, 2.0]   # explicit output times: finite, >= 0, strictly increasing, 2 to 10^7 of them
+
+    The ``[initial]`` values are at t = 0 whatever the output times: ``t_start`` skips the start of
+    the motion, it does not move the launch.  A system whose motion is defined over its own duration
+    (the falling cat: :attr:`~mechderive.systems.base.System.free_times` False) takes only ``t_end`` and
+    ``samples``.
 
     [output]
     quantities = ["theta", "phi", "psi"]   # names from QUANTITIES[system], each once
@@ -145,6 +156,8 @@ TOP_LEVEL_KEYS = ("name", "system", "method", "rtol", "strict")
 DEFAULT_STRICT = True
 TABLES = ("parameters", "initial", "time", "output")
 TIME_KEYS = ("t_end", "samples")
+#: every key [time] may hold: ``t_end`` with ``samples`` or ``samples_per_period`` (and ``t_start``), or ``times``
+TIME_ALL_KEYS = ("t_end", "samples", "t_start", "samples_per_period", "times")
 OUTPUT_KEYS = ("quantities",)
 #: optional keys of [output]: ``summary``, the per-motion quantities (turning angles, periods, invariants)
 OUTPUT_OPTIONAL_KEYS = ("summary",)
@@ -318,6 +331,12 @@ class Scene:
     definition: Mapping[str, Any] = field(default_factory=dict)
     #: the per-motion quantities asked for (``[output].summary``), each one of the system's ``summaries``
     summary: tuple = ()
+    #: the first output time (``[time].t_start``); the initial values are at t = 0 all the same
+    t_start: float = 0.0
+    #: explicit output times (``[time].times``), or None for ``samples`` equally spaced on [t_start, t_end]
+    times_given: tuple | None = None
+    #: ``[time].samples_per_period`` as given (``samples`` then follows from the system's period), or None
+    samples_per_period: int | None = None
     #: the concrete system (:class:`~mechderive.systems.base.System`) this scene runs, set on construction
     model: Any = field(default=None, compare=False, repr=False)
 
@@ -338,15 +357,43 @@ class Scene:
         set_(self, "parameters", model.check_parameters(_as_table("[parameters]", self.parameters or {}),
                                                         strict=self.strict))
         set_(self, "initial", model.check_initial(_as_table("[initial]", self.initial or {}), self.parameters))
-        set_(self, "t_end", _number("[time].t_end", self.t_end, expected="a finite number > 0",
-                                    valid=lambda x: x > 0))
+        set_(self, "quantities", _quantity_list(self.system, self.quantities, model.quantity_names()))
+        set_(self, "summary", _summary_list(self.system, self.summary, model.summary_names()))
+        self._check_times(model)
+        _check_size(self)
+
+    def _check_times(self, model: System) -> None:
+        """``t_end``, ``samples`` (or ``samples_per_period``), ``t_start`` or ``times``: checked and normalised."""
+        set_ = object.__setattr__
+        if not model.free_times and (self.times_given is not None or self.t_start != 0):
+            key = "[time].times" if self.times_given is not None else "[time].t_start"
+            raise InvalidInputError(f"scene key {key}: system {self.system!r} takes only t_end and samples (its "
+                                    f"motion is defined over [0, t_end]); got {key.split('.')[1]}")
+        if self.times_given is not None:
+            times = _times_list(self.times_given)
+            set_(self, "times_given", times)
+            set_(self, "t_start", times[0])
+            set_(self, "t_end", times[-1])
+            set_(self, "samples", len(times))
+            if self.samples_per_period is not None:
+                raise InvalidInputError("scene key [time].samples_per_period: expected either times or "
+                                        "samples_per_period, got both")
+            return
+        set_(self, "t_start", _number("[time].t_start", self.t_start, expected="a finite number >= 0",
+                                      valid=lambda x: x >= 0))
+        set_(self, "t_end", _number("[time].t_end", self.t_end, expected=f"a finite number > t_start "
+                                    f"({self.t_start!r})" if self.t_start else "a finite number > 0",
+                                    valid=lambda x: x > self.t_start))
+        if self.samples_per_period is not None:
+            n = self.samples_per_period
+            if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or not 2 <= n <= MAX_SAMPLES:
+                _fail("[time].samples_per_period", f"an integer in [2, {MAX_SAMPLES}]", n)
+            set_(self, "samples_per_period", int(n))
+            set_(self, "samples", _samples_from_period(self, model))
         if (isinstance(self.samples, bool) or not isinstance(self.samples, (int, np.integer))
                 or not 2 <= self.samples <= MAX_SAMPLES):
             _fail("[time].samples", f"an integer in [2, {MAX_SAMPLES}]", self.samples)
         set_(self, "samples", int(self.samples))
-        set_(self, "quantities", _quantity_list(self.system, self.quantities, model.quantity_names()))
-        set_(self, "summary", _summary_list(self.system, self.summary, model.summary_names()))
-        _check_size(self)
 
     @property
     def size_estimate(self) -> SizeEstimate:
@@ -354,8 +401,44 @@ class Scene:
         return SizeEstimate.of(self.system, self.samples, len(self.quantities))
 
     def times(self) -> np.ndarray:
-        """The sample times: ``samples`` equally spaced on [0, t_end], both ends included."""
-        return np.linspace(0.0, self.t_end, self.samples)
+        """The output times: ``times`` as given, else ``samples`` equally spaced on [t_start, t_end], both ends
+        included."""
+        if self.times_given is not None:
+            return np.array(self.times_given, dtype=float)
+        return np.linspace(self.t_start, self.t_end, self.samples)
+
+
+def _times_list(value: Any) -> tuple[float, ...]:
+    """``[time].times``: 2 to MAX_SAMPLES finite numbers >= 0, strictly increasing."""
+    if not isinstance(value, (list, tuple)) or not 2 <= len(value) <= MAX_SAMPLES:
+        _fail("[time].times", f"a list of 2 to {MAX_SAMPLES} times (s), strictly increasing", value)
+    times = tuple(_number(f"[time].times[{i}]", x, expected="a finite number >= 0", valid=lambda x: x >= 0)
+                  for i, x in enumerate(value))
+    for i in range(1, len(times)):
+        if not times[i] > times[i - 1]:
+            raise InvalidInputError(f"scene key [time].times[{i}]: expected times strictly increasing, got "
+                                    f"{times[i]!r} after {times[i - 1]!r}")
+    return times
+
+
+def _samples_from_period(scene: "Scene", model: System) -> int:
+    """``samples`` for ``samples_per_period`` N: ceil((t_end - t_start) / period × N) + 1, from the system's
+    period of this motion (:meth:`~mechderive.systems.base.System.period`)."""
+    period = model.period(scene)
+    if period is None or not math.isfinite(period) or period <= 0:
+        knows = [n for n in registry.names() if type(registry.get(n)).period is not System.period]
+        raise InvalidInputError(
+            f"scene key [time].samples_per_period: system {scene.system!r} does not know the period of this motion "
+            f"before solving (a steady or non-periodic motion, or a system without a known period: those that "
+            f"know theirs are {_one_of(knows) if knows else 'none'}); give samples instead")
+    periods = (scene.t_end - scene.t_start) / period
+    count = math.ceil(periods * scene.samples_per_period) + 1 if periods < MAX_SAMPLES else MAX_SAMPLES + 1
+    if count > MAX_SAMPLES:
+        raise InvalidInputError(
+            f"scene key [time].samples_per_period: expected at most {MAX_SAMPLES} samples in all, got "
+            f"{periods:.6g} periods of {period:.6g} s × {scene.samples_per_period} = {count} samples; give fewer "
+            "samples per period or a shorter run")
+    return count
 
 
 def parse_scene(mapping: Mapping[str, Any], *, name: str | None = None) -> Scene:
@@ -398,7 +481,8 @@ method, rtol, strict and tables [parameters], [initial], [time], [output]
         raise InvalidInputError(f"scene table [{missing[0]}]: missing; system {system.name!r} needs tables "
                                 + ", ".join(f"[{t}]" for t in needed))
     time, output = mapping["time"], mapping["output"]
-    _check_keys(time, "time", TIME_KEYS, TIME_KEYS, "key")
+    _check_keys(time, "time", TIME_ALL_KEYS, (), "key")
+    _check_time_keys(time)
     out_keys = OUTPUT_KEYS + (("expressions",) if "output.expressions" in extra else ())
     _check_keys(output, "output", out_keys + OUTPUT_OPTIONAL_KEYS, OUTPUT_KEYS, "key")
     definition = {k: mapping[k] for k in extra if k in mapping and not k.startswith("output.")}
@@ -406,9 +490,29 @@ method, rtol, strict and tables [parameters], [initial], [time], [output]
         definition["output.expressions"] = output["expressions"]
     return Scene(system=system.name, method=mapping.get("method", DEFAULT_METHOD),
                  rtol=mapping.get("rtol", DEFAULT_RTOL), parameters=mapping.get("parameters", {}),
-                 initial=mapping.get("initial", {}), t_end=time["t_end"], samples=time["samples"],
+                 initial=mapping.get("initial", {}), t_end=time.get("t_end"), samples=time.get("samples"),
+                 t_start=time.get("t_start", 0.0), times_given=time.get("times"),
+                 samples_per_period=time.get("samples_per_period"),
                  quantities=output["quantities"], summary=output.get("summary", ()), name=name if name is not None else mapping.get("name"),
                  strict=mapping.get("strict", DEFAULT_STRICT), definition=definition)
+
+
+def _check_time_keys(time: Mapping[str, Any]) -> None:
+    """[time] holds ``times`` alone, or ``t_end`` with one of ``samples``, ``samples_per_period`` (and ``t_start``)."""
+    if "times" in time:
+        others = [k for k in time if k != "times"]
+        if others:
+            raise InvalidInputError(f"scene key [time].{others[0]}: expected either times or t_end, samples "
+                                    f"(samples_per_period, t_start), got both")
+        return
+    if "t_end" not in time:
+        raise InvalidInputError("scene key [time].t_end: missing; expected t_end with samples (or "
+                                "samples_per_period), or a list times")
+    given = [k for k in ("samples", "samples_per_period") if k in time]
+    if len(given) != 1:
+        raise InvalidInputError("scene key [time].samples: " + (
+            "missing; expected samples or samples_per_period" if not given else
+            "expected samples or samples_per_period, got both"))
 
 
 # ----------------------------------------------------------------------------- reading
@@ -621,8 +725,13 @@ def scene_to_toml(scene: Scene) -> str:
               f"rtol = {_toml_value(scene.rtol)}"] + (["strict = false"] if not scene.strict else [])
     own = {k: v for k, v in scene.definition.items() if isinstance(v, Mapping)}  # the system's own tables
     lines += [f"{k} = {_toml_value(v)}" for k, v in scene.definition.items() if k not in own]
-    for table, content in (("parameters", scene.parameters), ("initial", scene.initial),
-                           ("time", {"t_end": scene.t_end, "samples": scene.samples}),
+    if scene.times_given is not None:
+        time = {"times": list(scene.times_given)}
+    else:
+        time = {**({"t_start": scene.t_start} if scene.t_start else {}), "t_end": scene.t_end,
+                **({"samples_per_period": scene.samples_per_period} if scene.samples_per_period is not None
+                   else {"samples": scene.samples})}
+    for table, content in (("parameters", scene.parameters), ("initial", scene.initial), ("time", time),
                            ("output", {"quantities": scene.quantities,
                                        **({"summary": scene.summary} if scene.summary else {})}),
                            *own.items()):

@@ -155,6 +155,10 @@ class System:
     methods: tuple[str, ...] = ("integrate",)
     #: peak bytes a solve needs per output sample (the schema's memory guard)
     bytes_per_sample: int = 600
+    #: whether :meth:`solve` takes any increasing output times ``t`` (False: only ``samples`` equally spaced on
+    #: [0, t_end], a motion defined over its own duration such as the falling cat's; ``[time] t_start`` and
+    #: ``times`` are then refused)
+    free_times: ClassVar[bool] = True
     #: the quantities :meth:`plot` draws from (``mechderive run --plot`` solves them too)
     plot_quantities: tuple[str, ...] = ()
     #: the per-motion quantities a scene may ask for in ``[output] summary = [...]`` (turning angles,

@@ -135,6 +135,7 @@ class FallingCat(System):
     """A deformable body turning at zero angular momentum by a loop of shape changes (3.7)."""
 
     name = "falling_cat"
+    free_times = False  # the shape loop spans [0, t_end]: the flip is defined over its own duration
     summary = "a cat dropped upside down with zero angular momentum turns over by changing shape"
     section = "3.7"
     parameters = _PARAMETERS
