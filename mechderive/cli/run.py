@@ -114,7 +114,7 @@ def run(args: argparse.Namespace) -> int:
         result = run_scene(solve_scene)
         bar.update(1)
         write_start = time.perf_counter()
-        columns = {q: result.columns[q] for q in scene.quantities}
+        columns = result.output_columns()
         if args.output:
             from ..scenes.output import write_table
 
@@ -161,12 +161,22 @@ def _summary(scene, result, report, args) -> None:
     fresh = sum(not c.endswith("(disk)") for c in report["compiled"])
     print(f"  derived {len(report['derived'])} quantities, compiled {fresh} functions, "
           f"{len(report['compiled']) - fresh} loaded from the disk cache")
+    if scene.given_with_units:
+        si = {f"[{table}].{k.name}": k.unit for table, keys in (("parameters", scene.model.parameters),
+                                                                ("initial", scene.model.initial)) for k in keys}
+        values = {**{f"[parameters].{k}": v for k, v in scene.parameters.items()},
+                  **{f"[initial].{k}": v for k, v in scene.initial.items()}}
+        print("  given with units: " + "; ".join(
+            f"{key} = {text} = {_shown_value(values.get(key), si.get(key, ''))}"
+            for key, text in scene.given_with_units.items()))
     names = list(scene.quantities)
-    width = max(12, *(len(n) + 1 for n in names))
-    print("\n" + "t".rjust(10) + "".join(" " + n.rjust(width + 6) for n in names))
+    shown = result.output_columns()
+    heads = [f"{n} [{scene.output_units[n]}]" if n in scene.output_units else n for n in names]
+    width = max(12, *(len(n) + 1 for n in heads))
+    print("\n" + "t".rjust(10) + "".join(" " + n.rjust(width + 6) for n in heads))
     rows = range(len(t)) if len(t) <= 8 else [0, 1, 2, len(t) // 2, len(t) - 3, len(t) - 2, len(t) - 1]
     for i in rows:
-        print(f"{t[i]:10.4f}" + "".join(f" {result.columns[n][i]:{width + 6}.12g}" for n in names))
+        print(f"{t[i]:10.4f}" + "".join(f" {shown[n][i]:{width + 6}.12g}" for n in names))
     if args.output:
         print(f"\nwrote {args.output}")
         if scene.summary:
@@ -192,6 +202,8 @@ def _shown_value(value, unit: str) -> str:
         return f"{value:.12g}{unit}"
     if isinstance(value, dict):
         return "{" + ", ".join(f"{k}: {_shown_value(v, '')}" for k, v in value.items()) + "}"
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(f"{x:.12g}" for x in value) + "]" + ("" if unit in ("", "1") else f" {unit}")
     return str(value)
 
 

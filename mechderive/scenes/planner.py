@@ -75,6 +75,18 @@ class RunResult:
     report: dict[str, Any] = field(default_factory=dict)
     solution: Any = None  # the solved object (in the solver's units where the report has ``units``)
 
+    def output_columns(self) -> dict[str, np.ndarray]:
+        """The scene's quantities as ``-o`` writes and the summary prints them: each in its ``[output].units``
+        where the scene gives one (``theta`` in deg), else SI; ``columns`` itself stays SI (plots, drift)."""
+        units = self.scene.output_units
+        if not units:
+            return {q: self.columns[q] for q in self.scene.quantities}
+        from .units import factor_to
+
+        si = {q.name: q.unit for q in self.scene.model.quantities}
+        return {q: self.columns[q] / factor_to(f"scene key [output].units.{q}", units[q], si.get(q, ""))
+                if q in units else self.columns[q] for q in self.scene.quantities}
+
 
 def choose_method(scene: Scene) -> tuple[str, str | None]:
     """(method, note): the solver a scene will use and, if the request cannot be met before the run, why."""
@@ -244,6 +256,10 @@ def run_scene(scene: Scene) -> RunResult:
         "waived": let_through,
         "details": info,
     }
+    if scene.output_units:
+        report["column_units"] = dict(scene.output_units)  # -o and the printed table; estimates stay SI
+    if scene.given_with_units:
+        report["given_with_units"] = dict(scene.given_with_units)
     if scene.summary:
         report["summary"] = summary
         report["summary_error"] = summary_error

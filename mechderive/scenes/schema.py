@@ -160,7 +160,7 @@ TIME_KEYS = ("t_end", "samples")
 TIME_ALL_KEYS = ("t_end", "samples", "t_start", "samples_per_period", "times")
 OUTPUT_KEYS = ("quantities",)
 #: optional keys of [output]: ``summary``, the per-motion quantities (turning angles, periods, invariants)
-OUTPUT_OPTIONAL_KEYS = ("summary",)
+OUTPUT_OPTIONAL_KEYS = ("summary", "units")
 
 
 class _Quantities(Mapping):
@@ -243,6 +243,48 @@ def _summary_list(system: str, value: Any, allowed: tuple[str, ...]) -> tuple[st
             raise InvalidInputError(f"scene key {where}: duplicate per-motion quantity {q!r}; each may appear once")
         seen.add(q)
     return tuple(value)
+
+
+def _in_si(table: str, values: Mapping[str, Any], keys: tuple[Key, ...], given: dict[str, str]) -> dict[str, Any]:
+    """``values`` with each string ("30 deg", or in a list) converted to its key's SI unit (:mod:`.units`);
+    ``given`` collects the texts as given, by "[table].key".  A table without strings is returned as is
+    (and pint is not imported)."""
+    from .units import is_unit_string, to_si  # light: pint itself is imported on the first conversion
+
+    if not any(is_unit_string(v) or (isinstance(v, (list, tuple)) and any(is_unit_string(x) for x in v))
+               for v in values.values()):
+        return dict(values)
+
+    units = {k.name: k.unit for k in keys}
+    out = dict(values)
+    for name, v in values.items():
+        where = f"scene key {table}.{_key_name(name)}"
+        if is_unit_string(v):
+            out[name] = to_si(where, v, units.get(name, ""))
+            given[f"{table}.{name}"] = v
+        elif isinstance(v, (list, tuple)) and any(is_unit_string(x) for x in v):
+            out[name] = [to_si(f"{where}[{i}]", x, units.get(name, "")) if is_unit_string(x) else x
+                         for i, x in enumerate(v)]
+            given[f"{table}.{name}"] = "[" + ", ".join(x if isinstance(x, str) else repr(x) for x in v) + "]"
+    return out
+
+
+def _output_units(value: Any, model: System, quantities: tuple[str, ...]) -> dict[str, str]:
+    """``[output].units``: {column: unit text}, each column one of the scene's quantities, each unit of its
+    dimension (checked, and its factor cached, by :func:`.units.factor_to`)."""
+    value = _as_table("[output].units", value or {})
+    if not value:
+        return {}
+    from .units import factor_to
+
+    si = {q.name: q.unit for q in model.quantities}
+    for name, unit in value.items():
+        where = f"scene key [output].units.{_key_name(name)}"
+        if name not in quantities:
+            raise InvalidInputError(f"{where}: expected one of the scene's quantities ({_one_of(quantities)}), "
+                                    f"got {_show(name)}")
+        factor_to(where, unit, si.get(name, ""))
+    return dict(value)
 
 
 def _name(value: Any) -> str | None:
@@ -331,6 +373,10 @@ class Scene:
     definition: Mapping[str, Any] = field(default_factory=dict)
     #: the per-motion quantities asked for (``[output].summary``), each one of the system's ``summaries``
     summary: tuple = ()
+    #: {output column: unit text} of ``[output].units``: the columns written and printed in those units
+    output_units: Mapping[str, str] = field(default_factory=dict)
+    #: {"[table].key": text} of the values given with units (``"30 deg"``), as given; the scene holds them in SI
+    given_with_units: Mapping[str, str] = field(default_factory=dict, compare=False)
     #: the first output time (``[time].t_start``); the initial values are at t = 0 all the same
     t_start: float = 0.0
     #: explicit output times (``[time].times``), or None for ``samples`` equally spaced on [t_start, t_end]
@@ -354,11 +400,15 @@ class Scene:
         lo, hi = RTOL_RANGE
         set_(self, "rtol", _number("rtol", self.rtol, expected=f"a number in [{lo:g}, {hi:g}]",
                                    valid=lambda x: lo <= x <= hi))
-        set_(self, "parameters", model.check_parameters(_as_table("[parameters]", self.parameters or {}),
-                                                        strict=self.strict))
-        set_(self, "initial", model.check_initial(_as_table("[initial]", self.initial or {}), self.parameters))
+        given = dict(self.given_with_units or {})
+        parameters = _in_si("[parameters]", _as_table("[parameters]", self.parameters or {}), model.parameters, given)
+        set_(self, "parameters", model.check_parameters(parameters, strict=self.strict))
+        initial = _in_si("[initial]", _as_table("[initial]", self.initial or {}), model.initial, given)
+        set_(self, "initial", model.check_initial(initial, self.parameters))
+        set_(self, "given_with_units", given)
         set_(self, "quantities", _quantity_list(self.system, self.quantities, model.quantity_names()))
         set_(self, "summary", _summary_list(self.system, self.summary, model.summary_names()))
+        set_(self, "output_units", _output_units(self.output_units, model, self.quantities))
         self._check_times(model)
         _check_size(self)
 
@@ -493,7 +543,8 @@ method, rtol, strict and tables [parameters], [initial], [time], [output]
                  initial=mapping.get("initial", {}), t_end=time.get("t_end"), samples=time.get("samples"),
                  t_start=time.get("t_start", 0.0), times_given=time.get("times"),
                  samples_per_period=time.get("samples_per_period"),
-                 quantities=output["quantities"], summary=output.get("summary", ()), name=name if name is not None else mapping.get("name"),
+                 quantities=output["quantities"], summary=output.get("summary", ()),
+                 output_units=output.get("units", {}), name=name if name is not None else mapping.get("name"),
                  strict=mapping.get("strict", DEFAULT_STRICT), definition=definition)
 
 
@@ -734,6 +785,7 @@ def scene_to_toml(scene: Scene) -> str:
     for table, content in (("parameters", scene.parameters), ("initial", scene.initial), ("time", time),
                            ("output", {"quantities": scene.quantities,
                                        **({"summary": scene.summary} if scene.summary else {})}),
+                           *((("output.units", scene.output_units),) if scene.output_units else ()),
                            *own.items()):
         if content:
             lines += ["", f"[{table}]"] + [f"{_toml_key(k)} = {_toml_value(v)}" for k, v in content.items()]
