@@ -28,11 +28,18 @@ __all__ = ["Drift", "drift"]
 
 @dataclass(frozen=True)
 class Drift:
-    """``value`` = max_t |x(t) - reference| / ``scale``; ``relative_to`` names the scale and gives its size."""
+    """``value`` = max_t |x(t) - reference| / ``scale``; ``relative_to`` names the scale and gives its size.
+
+    ``deviation`` is max_t |x(t) - reference| itself and ``start`` the quantity's value at the first sample
+    (a scalar quantity's; NaN for a vector): a run's per-motion summary reports an invariant as
+    ``start`` ± ``deviation``.
+    """
 
     value: float
     scale: float
     relative_to: str
+    deviation: float = float("nan")
+    start: float = float("nan")
 
 
 def drift(series: Any, scale: float, relative_to: str, *, reference: Any = None) -> Drift:
@@ -48,7 +55,7 @@ def drift(series: Any, scale: float, relative_to: str, *, reference: Any = None)
     x = np.asarray(series, dtype=float)
     scale = float(scale)
     if x.size == 0:
-        return Drift(0.0, scale, f"{relative_to} = {scale:.3g}")
+        return Drift(0.0, scale, f"{relative_to} = {scale:.3g}", 0.0)
     ref = x[0] if reference is None else np.asarray(reference, dtype=float)
     dev = np.abs(x - ref)
     if x.ndim > 1:
@@ -56,8 +63,10 @@ def drift(series: Any, scale: float, relative_to: str, *, reference: Any = None)
     bad = int(np.sum(~np.isfinite(dev)))
     worst = float(np.max(dev)) if bad == 0 else float("nan")
     undefined = f"; undefined at {bad} sample(s)" if bad else ""
+    start = float(x[0]) if x.ndim == 1 else float("nan")
     if not np.isfinite(scale):
-        return Drift(worst, scale, f"absolute (the scale {relative_to} of the motion is not defined){undefined}")
+        return Drift(worst, scale, f"absolute (the scale {relative_to} of the motion is not defined){undefined}",
+                     worst, start)
     if not scale > 0:
-        return Drift(worst, 0.0, f"absolute (the scale {relative_to} of the motion is 0){undefined}")
-    return Drift(worst / scale, scale, f"{relative_to} = {scale:.3g}{undefined}")
+        return Drift(worst, 0.0, f"absolute (the scale {relative_to} of the motion is 0){undefined}", worst, start)
+    return Drift(worst / scale, scale, f"{relative_to} = {scale:.3g}{undefined}", worst, start)

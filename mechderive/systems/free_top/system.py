@@ -23,6 +23,7 @@ import numpy as np
 
 from ...errors import InvalidInputError
 from ..base import Key, OutOfReach, Quantity, Solved, System
+from .summary import SUMMARIES
 from ..scene_keys import SCENE_STRICT_HINT, at, check_keys, number, number_list, rename_keys
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -340,6 +341,7 @@ class FreeTop(System):
     parameters = _PARAMETERS
     initial = _INITIAL
     quantities = _QUANTITIES
+    summaries = SUMMARIES
     methods = ("exact", "integrate")
     #: measured: the growth of maxrss from 5·10⁵ samples is 225-490 bytes per sample
     bytes_per_sample = 600
@@ -384,6 +386,19 @@ class FreeTop(System):
             I, w = np.array([work.parameters[k] for k in _MOMENTS]), np.array(work.initial["omega"])
             check_outputs(scaled, {"energy": 0.5 * float(np.dot(I, w * w)), "L_norm": float(np.linalg.norm(I * w))})
         return scaled
+
+    def summarize(self, scene: "Scene", solved: Solved, t: np.ndarray,
+                  names: tuple[str, ...]) -> dict[str, tuple[Any, Any]]:
+        """Polhode period, flip interval, precession rates, stability per axis, T and |L| (:mod:`.summary`)."""
+        from .summary import summarize
+
+        return summarize(scene, solved, t, names)
+
+    def period(self, scene: "Scene") -> float | None:
+        """The polhode period (s), for ``[time] samples_per_period``; None for a steady or separatrix motion."""
+        from .summary import period
+
+        return period(scene)
 
     def solve(self, scene: "Scene", method: str, t: np.ndarray) -> Solved:
         return _exact(scene, t) if method == "exact" else _integrate(scene, t)
