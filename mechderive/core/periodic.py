@@ -51,13 +51,14 @@ def _crossing(t: np.ndarray, x: np.ndarray, k: int, level: float, points: int) -
     return float(t[k] + min(real, key=lambda r: abs(r - b / 2)) * scale)
 
 
-def _at(t: np.ndarray, y: np.ndarray, when: float) -> np.ndarray:
-    """The state at ``when``, by the cubic through the four samples around it."""
+def _at(t: np.ndarray, y: np.ndarray, when: float, points: int) -> np.ndarray:
+    """The state at ``when``, by the polynomial through the ``points`` samples around it (Lagrange's form)."""
     k = int(np.clip(np.searchsorted(t, when) - 1, 0, len(t) - 2))
-    lo = min(max(k - 1, 0), len(t) - 4)
-    ts = t[lo:lo + 4]
-    weights = np.array([np.prod([(when - ts[j]) / (ts[i] - ts[j]) for j in range(4) if j != i]) for i in range(4)])
-    return weights @ y[lo:lo + 4]
+    lo = min(max(k - (points - 2) // 2, 0), len(t) - points)
+    ts = t[lo:lo + points]
+    weights = np.array([np.prod([(when - ts[j]) / (ts[i] - ts[j]) for j in range(points) if j != i])
+                        for i in range(points)])
+    return weights @ y[lo:lo + points]
 
 
 def measure_period(t: np.ndarray, state: np.ndarray, *, component_errors: np.ndarray | None = None) -> Period:
@@ -90,10 +91,13 @@ def measure_period(t: np.ndarray, state: np.ndarray, *, component_errors: np.nda
     period = float((cubic[-1] - cubic[0]) / (len(cubic) - 1))
     spread = float(np.max(np.abs(intervals - period)))
     # the whole state must come back at each crossing: else the motion is not periodic
-    states = np.array([_at(t, y, when) for when in cubic])
+    states = np.array([_at(t, y, when, 6) for when in cubic])
+    state_error = np.max(np.abs(states - np.array([_at(t, y, when, 4) for when in cubic])), axis=0)
     h = float(np.max(np.diff(t)))
     slope = np.max(np.abs(np.diff(y, axis=0)), axis=0) / h  # a bound of each component's rate
-    allowed = slope * (interpolation + 2 * spread) + 1e-6 * ranges + (
+    # the return is judged to the samples' own precision: the interpolation, a millionth of each component's
+    # swing, and 1e-9 of its size (a nearly constant component, ω3 of a symmetric top, varies by its rounding)
+    allowed = slope * (interpolation + 2 * spread) + 2 * state_error + 1e-6 * ranges + 1e-9 * np.max(np.abs(y), axis=0) + (
         0.0 if component_errors is None else 2 * np.asarray(component_errors, dtype=float))
     mismatch = np.max(np.abs(states - states[0]), axis=0)
     if np.any(mismatch > allowed):
@@ -101,4 +105,9 @@ def measure_period(t: np.ndarray, state: np.ndarray, *, component_errors: np.nda
         return Period(None, None, f"not periodic within the run: component {worst} of the state differs by "
                                   f"{mismatch[worst]:.3g} between returns of component {c} (quasi-periodic, "
                                   "or not bounded)", len(up))
-    return Period(period, float(interpolation + spread + 4 * np.spacing(period)), "", len(up))
+    # an error δx of the samples themselves moves a crossing by δx / slope, at each end of the run
+    sample_error = 0.0
+    if component_errors is not None:
+        crossing_slope = float(np.min(np.abs(np.diff(x)[up]) / np.diff(t)[up]))
+        sample_error = 2 * float(np.asarray(component_errors, dtype=float)[c]) / crossing_slope / (len(cubic) - 1)
+    return Period(period, float(interpolation + spread + sample_error + 4 * np.spacing(period)), "", len(up))

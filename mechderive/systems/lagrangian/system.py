@@ -99,6 +99,11 @@ class LagrangianSystem(System):
             + tuple(Quantity(f"p_{q}", "", f"momentum ∂L/∂{q}_dot of the cyclic coordinate {q} (conserved)")
                     for q in eq.cyclic)
             + tuple(Quantity(n, "", f"output expression {n}") for n, _ in d.expressions))
+        from ..summaries import PERIOD, invariant_quantities
+
+        self.summaries = (PERIOD,) + invariant_quantities(
+            {n: ("", "Jacobi integral h" if n == "energy" else f"momentum of the cyclic coordinate {n[2:]}", "")
+             for n in eq.conserved_names})
 
     @property
     def equations(self) -> "LagrangianEquations":
@@ -314,6 +319,27 @@ class LagrangianSystem(System):
                 total += np.abs(outputs(shifted) - base)
         propagated = float(np.max(total)) if total.size else 0.0
         return max(worst, propagated) if np.isfinite(propagated) else float("nan")
+
+    def summarize(self, scene: "Scene", solved: Solved, t: "np.ndarray",
+                  names: tuple[str, ...]) -> dict[str, tuple[Any, Any]]:
+        """``period`` of the reduced motion (non-cyclic q and every q̇), measured on the trajectory; the
+        conserved quantities' values (:mod:`..summaries`)."""
+        import numpy as np
+
+        from ..summaries import invariants_of, period_of
+
+        out = invariants_of(self.drift(scene, solved, t), tuple(n for n in names if n != "period"),
+                            "the Lagrangian depends on t")
+        if "period" in names:
+            traj, n = solved.solution, len(self.definition.coordinates)
+            keep = [i for i, q in enumerate(self.definition.coordinates) if q not in self.equations.cyclic]
+            columns = keep + list(range(n, 2 * n))
+            errors = None if traj.component_error is None else np.asarray(traj.component_error)[columns]
+            if self.definition.uses_time:
+                out["period"] = (None, "the Lagrangian depends on t: the motion need not repeat")
+            else:
+                out["period"] = period_of(np.asarray(traj.t), np.asarray(traj.y)[:, columns], errors)
+        return {name: out[name] for name in names}
 
     def drift(self, scene: "Scene", solved: Solved, t: "np.ndarray") -> dict[str, "Drift"]:
         """Energy (when ∂L/∂t = 0) and each p_c, each against the largest sum of the sizes of its terms."""

@@ -39,6 +39,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from ...errors import InvalidInputError
+from ..summaries import PERIOD, invariant_quantities
 from ..base import Derivation, Key, OutOfReach, Quantity, Solved, System
 
 __all__ = ["RigidBody", "SYSTEM", "rigid_body"]
@@ -204,6 +205,13 @@ def check_attitude(given: Mapping[str, Any], *, scene: bool = True) -> dict[str,
     return {k: s[k] for k in ("phi", "theta", "psi", "omega")}
 
 
+_SUMMARIES = (PERIOD,) + invariant_quantities({
+    "energy": ("J", "energy E = T + V, conserved without an applied torque", "energy"),
+    "L_vertical": ("kg m^2/s", "angular momentum about the vertical ẽ3, conserved", "angular momentum"),
+    "p_psi": ("kg m^2/s", "I3 ω3, conserved where the body is symmetric about e3 with c on it", "angular momentum"),
+})
+
+
 class RigidBody(System):
     """A rigid body about a fixed point in uniform gravity, with an optional applied torque (``[torque]``)."""
 
@@ -214,6 +222,7 @@ class RigidBody(System):
     parameters = _PARAMETERS
     initial = _INITIAL
     quantities = _QUANTITIES
+    summaries = _SUMMARIES
     methods: tuple[str, ...] = ("exact", "integrate")
     bytes_per_sample = 1200
 
@@ -294,6 +303,29 @@ class RigidBody(System):
         except OutOfReach as exc:
             return f"no closed form applies: {exc}"
         return "the closed form could not follow this motion (see the note)"
+
+    def summarize(self, scene: Any, solved: Solved, t: np.ndarray, names: tuple[str, ...]) -> dict:
+        """``period`` of the reduced motion (ω and the vertical's body components R_a3; for a body symmetric
+        about e3 with c on it, cos θ, ω1² + ω2² and ω3), measured on the solution (a symmetric top's is its
+        nutation period; an asymmetric heavy body's motion is in general not periodic, and says so);
+        E, L·ẽ3 and p_ψ where conserved: their values at t = 0 and their variation along the run."""
+        from ..summaries import invariants_of, period_of
+
+        out = invariants_of(self.drift(scene, solved, t), tuple(n for n in names if n != "period"),
+                            "nothing is with an applied torque; p_ψ = I3 ω3 only for a body symmetric about e3 "
+                            "(I1 = I2) with its centre of mass on that axis")
+        if "period" in names:
+            from .motion import conserved_axial
+
+            motion = solved.solution
+            w, gamma = motion.omega, motion.R[:, :, 2]  # body components of ω and of the vertical ẽ3
+            if conserved_axial(self.body(scene.parameters))[2]:
+                # symmetric about e3: ψ is cyclic too; (cos θ, ω1² + ω2², ω3) do not see it
+                state = np.stack([gamma[:, 2], w[:, 0] ** 2 + w[:, 1] ** 2, w[:, 2]], axis=1)
+            else:
+                state = np.concatenate([w, gamma], axis=1)
+            out["period"] = period_of(np.asarray(motion.t), state)
+        return {name: out[name] for name in names}
 
     def drift(self, scene: Any, solved: Solved, t: np.ndarray) -> dict:
         from .motion import drifts
