@@ -68,7 +68,7 @@ def add_parser(sub: "argparse._SubParsersAction") -> None:
                    "undecided (the one-time derivation of the system's model, up to ~4 s, comes before)")
     p.add_argument("--any-moments", action="store_true",
                    help="draw the parameters independently (any positive values), not only real bodies")
-    p.set_defaults(run=run)
+    p.set_defaults(run=run_cached)
 
 
 #: Claims a ``--file`` may hold: each is decided within its own --budget, so 1000 take at most ~1.4 hours.
@@ -191,6 +191,14 @@ def _scene_givens(system, parameters: dict, given: list[str]) -> list[str]:
                 and system.kind(system.names[name]) == "parameter" and name not in typed):
             out.append(f"{name} = {float(value)!r}")
     return out
+
+
+def run_cached(args: argparse.Namespace) -> int:
+    """:func:`run`, or its answer replayed from the disk cache: finished verdicts only (status 0 or 1),
+    never one the time budget left undecided."""
+    from .replay import cached
+
+    return cached("check", args, run, keep=(0, 1), files=("file",))
 
 
 def run(args: argparse.Namespace) -> int:

@@ -69,7 +69,7 @@ def add_parser(sub: "argparse._SubParsersAction") -> None:
     p.add_argument("--at", default=None, metavar="POINT",
                    help="with QUANTITY linearization: the equilibrium or steady motion, e.g. "
                         "\"theta=0.7, phi_dot=2.5\" (coordinates, velocities of cyclic ones or their momenta p_<q>)")
-    p.set_defaults(run=run)
+    p.set_defaults(run=run_cached)
 
 
 def _number(value) -> float | str:
@@ -122,6 +122,13 @@ def _shape_and_quantities(args: argparse.Namespace, spec) -> tuple[str | None, l
             raise InvalidInputError(f"expected a shape after {spec.name}, one of {', '.join(BODIES)}, got {got!r}")
         shape = quantities.pop(0)
     return shape, quantities
+
+
+def run_cached(args: argparse.Namespace) -> int:
+    """:func:`run`, or its answer replayed from the disk cache (:mod:`mechderive.core.textcache`)."""
+    from .replay import cached
+
+    return cached("derive", args, run)
 
 
 def run(args: argparse.Namespace) -> int:

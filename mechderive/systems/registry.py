@@ -17,7 +17,7 @@ import threading
 from ..errors import InvalidInputError
 from .base import System
 
-__all__ = ["register", "register_system", "unregister", "get", "names"]
+__all__ = ["register", "register_system", "unregister", "get", "names", "is_builtin"]
 
 #: built-in system name -> module whose ``SYSTEM`` attribute is the system (imported on first use)
 _BUILTIN = {
@@ -80,3 +80,13 @@ def get(name: str) -> System:
     system = importlib.import_module(module).SYSTEM
     with _LOCK:
         return _LOADED.setdefault(name, system)
+
+
+def is_builtin(name: str) -> bool:
+    """Whether ``name`` is a system shipped with the package, not replaced by a program's own."""
+    module = _BUILTIN.get(name) if isinstance(name, str) else None
+    if module is None:
+        return False
+    with _LOCK:
+        hit = _LOADED.get(name)
+    return hit is None or hit is importlib.import_module(module).SYSTEM
