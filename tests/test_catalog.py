@@ -196,3 +196,13 @@ def test_verify_console_table_runs():
     proc = run_python("-m", "mechderive.cli", "verify", "--section", "3.5")
     assert proc.returncode == 0, proc.stderr
     assert "verified" in proc.stdout and "(3.54)" not in proc.stderr
+
+
+def test_verify_jobs_gives_the_same_rows_in_the_same_order(capsys):
+    rows = {}
+    for jobs in ("1", "2"):
+        assert main(["verify", "--section", "3.4", "--json", "--jobs", jobs]) == 0
+        rows[jobs] = [{k: v for k, v in r.items() if k != "seconds"} for r in json.loads(capsys.readouterr().out)]
+    assert rows["1"] == rows["2"] and len({r["section"] for r in rows["1"]}) > 1  # several sections, two processes
+    assert main(["verify", "--jobs", "0"]) == 2
+    assert "--jobs: expected an integer in [1, 64], got 0" in capsys.readouterr().err
