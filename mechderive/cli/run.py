@@ -24,6 +24,8 @@ def add_parsers(sub: "argparse._SubParsersAction") -> None:
                    "[output].summary to OUT.summary.json beside it)")
     p.add_argument("--json", action="store_true", help="print the run's report as JSON")
     p.add_argument("--plot", metavar="PNG", help="draw the motion to PNG (needs the `plot` extra: matplotlib)")
+    p.add_argument("--animate", metavar="FILM", help="draw the moving body, ω, L and its traces to FILM.gif (or "
+                   ".mp4 with ffmpeg on the PATH); needs the `plot` extra")
     p.add_argument("--no-cache", action="store_true", help="do not read or write the disk cache of compiled code")
     p.set_defaults(run=run)
 
@@ -104,10 +106,16 @@ def run(args: argparse.Namespace) -> int:
             from ..scenes.output import check_output_path, summary_path
 
             check_output_path(summary_path(args.output), (".json",), what="-o's summary file")
+    if args.animate:
+        from ..scenes.animate import check_animation_target
+
+        check_animation_target(args.animate, scene.model)
     parse_s = time.perf_counter() - start
     solve_scene = scene
-    if args.plot:
-        extra = tuple(q for q in scene.model.plot_quantities if q not in scene.quantities)
+    if args.plot or args.animate:
+        wanted = (scene.model.plot_quantities if args.plot else ()) + (
+            scene.model.animation_quantities if args.animate else ())
+        extra = tuple(dict.fromkeys(q for q in wanted if q not in scene.quantities))
         solve_scene = dataclasses.replace(scene, quantities=scene.quantities + extra)
     with Progress(3, label=f"{scene.name or 'scene'}") as bar:
         bar.update(1)
@@ -124,10 +132,16 @@ def run(args: argparse.Namespace) -> int:
 
                 write_summary(summary_path(args.output), result.report, _summary_units(scene),
                               what="-o's summary file")
+        if args.plot or args.animate:
+            _warn_if_undersampled(scene, result)
         if args.plot:
             from ..scenes.plot import plot_result
 
             plot_result(result, args.plot, title=f"{scene.name or scene.system}", what="--plot")
+        if args.animate:
+            from ..scenes.animate import animate_result
+
+            animate_result(result, args.animate, title=f"{scene.name or scene.system}")
         bar.update(1)
     report = dict(result.report)
     report["timings"] = {"parse": round(parse_s, 6), **report["timings"],
@@ -185,6 +199,30 @@ def _summary(scene, result, report, args) -> None:
             print(f"wrote {summary_path(args.output)}")
     if args.plot:
         print(f"drew {args.plot}")
+    if args.animate:
+        print(f"drew {args.animate}")
+
+
+#: fewer samples per period than this and a picture cannot show the motion (a nutation drawn as a polygon)
+MIN_SAMPLES_PER_PERIOD = 20
+
+
+def _warn_if_undersampled(scene, result) -> None:
+    """Warn on stderr when the samples are too few to resolve the motion's period (nutation, polhode)."""
+    try:
+        period = scene.model.period(scene)
+    except Exception:  # noqa: BLE001 - a period that cannot be had is no reason to refuse a picture
+        period = None
+    if period is None or not period > 0:
+        return
+    import numpy as np
+
+    t = result.t
+    per_period = period / float(np.max(np.diff(t))) if len(t) > 1 else 0.0
+    if per_period < MIN_SAMPLES_PER_PERIOD:
+        print(f"mechderive: warning: {per_period:.3g} samples per period ({period:.4g} s) are too few to draw the "
+              f"motion (at least {MIN_SAMPLES_PER_PERIOD}): use [time] samples_per_period = 50, or more samples",
+              file=sys.stderr)
 
 
 def _summary_units(scene) -> dict[str, str]:

@@ -161,6 +161,8 @@ class System:
     free_times: ClassVar[bool] = True
     #: the quantities :meth:`plot` draws from (``mechderive run --plot`` solves them too)
     plot_quantities: tuple[str, ...] = ()
+    #: the quantities :meth:`motion_geometry` draws from (``mechderive run --animate`` solves them too)
+    animation_quantities: tuple[str, ...] = ()
     #: the per-motion quantities a scene may ask for in ``[output] summary = [...]`` (turning angles,
     #: periods, invariants' values), each with its unit and meaning; :meth:`summarize` computes them
     summaries: tuple[Quantity, ...] = ()

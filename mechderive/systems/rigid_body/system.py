@@ -222,6 +222,8 @@ class RigidBody(System):
     parameters = _PARAMETERS
     initial = _INITIAL
     quantities = _QUANTITIES
+    animation_quantities = ("omega1", "omega2", "omega3",
+                            "R11", "R12", "R13", "R21", "R22", "R23", "R31", "R32", "R33")
     summaries = _SUMMARIES
     methods: tuple[str, ...] = ("exact", "integrate")
     bytes_per_sample = 1200
@@ -416,6 +418,15 @@ class RigidBody(System):
             Derivation("axial_momentum_rates", "d(I_a ω_a)/dt along the equations: p_ψ = I3 ω3 is conserved where "
                        "the third vanishes (I1 = I2, c1 = c2 = 0)", "(3.63)", get("axial_momentum_rates")),
         )
+
+    def motion_geometry(self, result: Any) -> Any:
+        """The box with the body's principal moments about the fixed point, its e3 trace, ω and L."""
+        from ..figures import body_geometry, box_half_lengths
+
+        p = result.scene.parameters
+        moments = (p["I1"], p["I2"], p["I3"])
+        return body_geometry(result.t, result.columns, moments, shape="box", size=box_half_lengths(*moments),
+                             traces_from_apex=True)
 
     def example_scene(self) -> str:
         return EXAMPLE
