@@ -137,3 +137,24 @@ def test_reference_values_copied_into_the_package_match_the_committed_files():
     case = free["generic"]
     assert (case["moments"], case["omega0"]) == ([1.0, 2.0, 3.0], [1.0, 0.5, 1.0])
     assert [(p["t"], *p["omega"]) for p in case["points"]] == list(FREE_REFERENCE)
+
+
+def test_interactive_section_is_left_out_of_quick_and_reports_a_table(quick):
+    from mechderive.bench.interactive import BASELINES, report_lines
+
+    assert "interactive" not in quick  # a minute of fresh processes: named with --only
+    for job, script in BASELINES.items():
+        compile(script, f"<baseline {job}>", "exec")  # the usual path's scripts are whole programs
+    lines = report_lines({"rows": {"run": {"command": "mechderive run", "cold": 2.5, "warm": 0.2,
+                                           "baseline": 1.6, "warm_runs": [0.2]}}, "repeats": 1})
+    assert "| `mechderive run` | 2.50 s | 0.20 s | 1.60 s | 8× |" in lines
+
+
+@pytest.mark.slow
+def test_interactive_section_measures_every_job():
+    from mechderive.bench.interactive import interactive
+
+    rows = interactive(quick=True)["rows"]
+    assert set(rows) == {"derive", "check", "run"}
+    for r in rows.values():
+        assert 0 < r["warm"] <= r["cold"] * 1.5 and r["baseline"] > 0

@@ -184,8 +184,12 @@ def format_report(result: dict) -> str:
         from .rigid_body import report_lines
 
         L += report_lines(rb, _wp_table)
-    skipped = [s for s in ("heavy_top", "free_top", "ensemble", "cold_start", "laziness", "rigid_body")
-               if s not in result]
+    if result.get("interactive"):
+        from .interactive import report_lines as interactive_lines
+
+        L += interactive_lines(result["interactive"])
+    skipped = [s for s in ("heavy_top", "free_top", "ensemble", "cold_start", "laziness", "rigid_body",
+                           "interactive") if s not in result]
     if skipped:
         L += [f"Not run: {', '.join(skipped)} (see --only; --quick leaves out laziness).", ""]
     targets = result.get("targets", [])

@@ -22,7 +22,8 @@ def add_parser(sub: "argparse._SubParsersAction") -> None:
     p.add_argument("--plot", metavar="PNG", help="draw the work-precision figure (needs the `plot` extra: matplotlib)")
     p.add_argument("--json", action="store_true", help="print every figure as JSON instead of the tables")
     p.add_argument("--only", metavar="SECTIONS",
-                   help="comma-separated subset of heavy_top,free_top,ensemble,cold_start,laziness")
+                   help="comma-separated subset of heavy_top,free_top,ensemble,cold_start,laziness,rigid_body,"
+                        "interactive")
     p.set_defaults(run=run)
 
 
