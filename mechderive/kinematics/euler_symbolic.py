@@ -62,6 +62,19 @@ def _exp(m: sp.Matrix) -> sp.Matrix:
     return m.exp().applyfunc(lambda e: e.rewrite(sp.cos))
 
 
+def _exp_generator(angle: sp.Symbol, J: sp.Matrix) -> sp.Matrix:
+    """exp(α J) for a generator with J³ = -J, summed in closed form: the series Σ αⁿ Jⁿ / n! splits into
+    its odd and even powers, Jⁿ = ±J or ±J², so exp(α J) = 1 + sin α J + (1 - cos α) J² (Rodrigues).
+
+    J³ = -J is checked here, not assumed; the general :func:`_exp` (SymPy's eigen-decomposition, ~0.1 s
+    per matrix) gives the same matrices (``tests/test_kinematics.py``)."""
+    if J ** 3 != -J:
+        from ..errors import DerivationError
+
+        raise DerivationError(f"expected a generator with J³ = -J, got J = {J.tolist()}")
+    return sp.eye(3) + sp.sin(angle) * J + (1 - sp.cos(angle)) * J ** 2
+
+
 def _simplify_matrix(m: sp.Matrix) -> sp.Matrix:
     return m.applyfunc(simplify_trig)
 
@@ -79,12 +92,12 @@ class KinematicsModel(SymbolicModel):
     @derived
     def R1(self) -> sp.Matrix:
         """R1(α) = exp(α J1), the passive rotation by α about axis 1 (3.52), in the symbol ``alpha``."""
-        return _simplify_matrix(_exp(self.angle * generator(1)))
+        return _simplify_matrix(_exp_generator(self.angle, generator(1)))
 
     @derived
     def R3(self) -> sp.Matrix:
         """R3(α) = exp(α J3), the passive rotation by α about axis 3 (3.51), in the symbol ``alpha``."""
-        return _simplify_matrix(_exp(self.angle * generator(3)))
+        return _simplify_matrix(_exp_generator(self.angle, generator(3)))
 
     @derived
     def rotation(self) -> sp.Matrix:
@@ -95,17 +108,42 @@ class KinematicsModel(SymbolicModel):
 
     @derived
     def angular_velocity_matrix(self) -> sp.Matrix:
-        """ω = Ṙ Rᵀ (3.5), antisymmetric; ω_ac = Ṙ_ab R_cb."""
-        R = self.rotation
-        return _simplify_matrix(R.diff(t) * R.T)
+        """ω = Ṙ Rᵀ (3.5), antisymmetric; ω_ac = Ṙ_ab R_cb, i.e. ω_bc = ε_bcd ω_d of the body components."""
+        w = self.angular_velocity_body
+        return sp.Matrix(3, 3, lambda b, c: sum(sp.LeviCivita(b + 1, c + 1, d + 1) * w[d] for d in range(3)))
+
+    @derived
+    def elementary_angular_velocities(self) -> tuple:
+        """The body components ω_a = ½ ε_abc (Ṙ Rᵀ)_bc (3.5)-(3.6) of R1(α(t)) and R3(α(t)): α̇ along their axis.
+
+        Each is the one-angle case of (3.5), simplified in one variable (cheap), not assumed."""
+        alpha = sp.Function("alpha")(t)
+        out = []
+        for R in (self.R1, self.R3):
+            Ra = R.subs(self.angle, alpha)
+            w = _simplify_matrix(Ra.diff(t) * Ra.T)
+            out.append(sp.Matrix([sp.Rational(1, 2) * sum(sp.LeviCivita(a, b, c) * w[b - 1, c - 1]
+                                                          for b in (1, 2, 3) for c in (1, 2, 3))
+                                  for a in (1, 2, 3)]).subs(alpha.diff(t), 1).subs(alpha, 0))
+        return tuple(out)
 
     @derived
     def angular_velocity_body(self) -> sp.Matrix:
-        """Body components ω_a = ½ ε_abc ω_bc (3.6) of ω = Ṙ Rᵀ: the derivation behind (3.58)."""
-        w = self.angular_velocity_matrix
-        vec = sp.Matrix([sp.Rational(1, 2) * sum(sp.LeviCivita(a, b, c) * w[b - 1, c - 1]
-                                                 for b in (1, 2, 3) for c in (1, 2, 3)) for a in (1, 2, 3)])
-        return vec.applyfunc(simplify_trig)
+        """Body components ω_a = ½ ε_abc ω_bc (3.6) of ω = Ṙ Rᵀ: the derivation behind (3.58).
+
+        Derived by the structure of R = A B C = R3(ψ) R1(θ) R3(φ) rather than by simplifying the
+        9 entries of Ṙ Rᵀ (the slow part of a cold start): the product rule gives
+        Ṙ Rᵀ = Ȧ Aᵀ + A (Ḃ Bᵀ) Aᵀ + A B (Ċ Cᵀ) Bᵀ Aᵀ, and for a rotation M the matrix of a vector v
+        conjugates as M ω(v) Mᵀ = ω(M v), so ω = ω_A + A ω_B + A B ω_C with each ω of one elementary
+        rotation (:attr:`elementary_angular_velocities`).  ``tests/test_kinematics.py`` checks the result
+        against the simplified Ṙ Rᵀ itself.
+        """
+        phi, theta, psi = euler_angles()
+        w1, w3 = self.elementary_angular_velocities
+        a = self.angle
+        A, B = self.R3.subs(a, psi), self.R1.subs(a, theta)
+        vec = w3 * psi.diff(t) + A * (w1 * theta.diff(t)) + A * B * (w3 * phi.diff(t))
+        return vec.applyfunc(sp.expand)
 
     @derived
     def angular_velocity_space(self) -> sp.Matrix:
