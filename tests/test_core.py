@@ -27,8 +27,10 @@ def test_requesting_rotation_derives_nothing_about_angular_velocity():
 def test_body_angular_velocity_does_not_derive_space_or_convective_quantities():
     m = KinematicsModel()
     m.state_angular_velocity_body
-    assert set(m.derived) == {"R3", "R1", "rotation", "angular_velocity_matrix", "angular_velocity_body",
+    # by the structure of R = R3 R1 R3: the elementary rotations and their ω, not R itself or Ṙ Rᵀ
+    assert set(m.derived) == {"R3", "R1", "elementary_angular_velocities", "angular_velocity_body",
                               "state_angular_velocity_body"}
+    assert not m.is_derived("angular_velocity_space") and not m.is_derived("convective_angular_velocity_matrix")
     before = list(m.derived)
     m.state_angular_velocity_body  # cached: no second derivation
     assert m.derived == before
