@@ -132,3 +132,13 @@ def test_scenes_quantities_lists_the_summaries(probe, capsys):
     assert main(["scenes", "--quantities", "probe_top"]) == 0
     out = capsys.readouterr().out
     assert "[output].summary" in out and "run_length" in out and "t_end − t_start of the run" in out
+
+
+def test_readme_lists_every_systems_quantities_as_the_registry_has_them():
+    from pathlib import Path
+
+    from mechderive.cli.run import quantities_markdown
+
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
+    block = readme.split("<!-- quantities:begin -->\n", 1)[1].split("<!-- quantities:end -->", 1)[0]
+    assert block == quantities_markdown()  # regenerate with mechderive.cli.run.quantities_markdown()

@@ -313,3 +313,21 @@ def _quantities(name: str) -> None:
         print("[output].summary (per-motion quantities, one value per run):")
         for q in summaries:
             print(f"  {q.name:<{width}}  {q.unit or '-':<{units}}  {q.meaning}")
+
+
+def quantities_markdown(names: tuple[str, ...] = ("heavy_top", "free_top", "rigid_body", "falling_cat")) -> str:
+    """The README's list of each built-in system's output columns and per-motion quantities (a test keeps the
+    README equal to it): name, unit, meaning."""
+    from ..systems import registry
+
+    lines: list[str] = []
+    for name in names:
+        system = registry.get(name)
+        lines += [f"**{name}** — columns (`quantities`): "
+                  + ", ".join(f"`{q.name}` ({q.unit or '-'})" for q in system.quantities) + ".", ""]
+        if system.summaries:
+            lines += [f"| `{name}` per-motion quantity (`summary`) | unit | meaning |", "|---|---|---|"]
+            lines += [f"| `{q.name}` | {q.unit or '-'} | {q.meaning.replace('|', chr(92) + '|')} |"
+                      for q in system.summaries]
+            lines.append("")
+    return "\n".join(lines).rstrip("\n") + "\n"
