@@ -315,13 +315,13 @@ def _quantities(name: str) -> None:
             print(f"  {q.name:<{width}}  {q.unit or '-':<{units}}  {q.meaning}")
 
 
-def quantities_markdown(names: tuple[str, ...] = ("heavy_top", "free_top", "rigid_body", "falling_cat")) -> str:
-    """The README's list of each built-in system's output columns and per-motion quantities (a test keeps the
-    README equal to it): name, unit, meaning."""
+def quantities_markdown() -> str:
+    """The README's list of each registered system's output columns and per-motion quantities (a test keeps
+    the README equal to it): name, unit, meaning; systems whose quantities depend on the scene are left out."""
     from ..systems import registry
 
     lines: list[str] = []
-    for name in names:
+    for name in (n for n in registry.names() if registry.get(n).quantities):
         system = registry.get(name)
         lines += [f"**{name}** — columns (`quantities`): "
                   + ", ".join(f"`{q.name}` ({q.unit or '-'})" for q in system.quantities) + ".", ""]
