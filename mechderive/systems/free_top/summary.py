@@ -13,9 +13,10 @@ motion, never a constant:
   flip of a body spun near that axis (the tennis racket, section 3.4.3).  Defined for three distinct
   moments and a periodic (elliptic) motion.
 * ``precession_rate`` (symmetric top, two equal moments I⊥ and the symmetry axis a of moment I_a):
-  {"body": Ω, "space": φ̇}: Ω = ω_a (I⊥ - I_a)/I⊥ (3.36), the rate at which ω turns about the symmetry
-  axis in the body, and φ̇ = |L|/I⊥ (3.60), the rate at which the symmetry axis turns about L in space.
-  Their estimates propagate the rounding of the inputs (a few ulp of each term), computed on this motion.
+  {"body": Ω, "space": φ̇}: Ω of (3.35)-(3.36) read off the derived symmetric equations, the rate at which
+  ω turns about the symmetry axis in the body; φ̇, the rate at which the symmetry axis turns about L in
+  space, from the closed form (its precession per polhode period over the period).  The estimate is the
+  rounding of Ω's terms and the difference between the closed form's φ̇ and |L|/I⊥ (3.60).
 * ``stability``: per principal axis, for a spin about it at this motion's rate |ω(0)|: "stable" with the
   angular frequency of small oscillations, "unstable" with the growth rate (3.44)-(3.45), "neutral" for
   an axis of equal moments — from the eigenvalues of Euler's equations linearised about that spin
@@ -57,8 +58,25 @@ def _moments_and_omega(scene: Any) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _omega_dot(moments: np.ndarray, w: np.ndarray) -> np.ndarray:
-    """Euler's equations (3.33), I ω̇ = (I ω) × ω."""
-    return np.cross(moments * w, w) / moments
+    """ω̇ by Euler's equations (3.33) as derived (:attr:`.model.FreeTopModel.free_rhs`, compiled)."""
+    from .stability import _compiled
+
+    return np.asarray(_compiled("free_rhs")(*w, *moments), dtype=float).reshape(3)
+
+
+def _symmetric_rate(perp: float, axial: float, spin: float) -> float:
+    """Ω of (3.35)-(3.36) as derived from the symmetric top's equations
+    (:attr:`.model.FreeTopModel.symmetric_precession_rate`, symmetry axis 3; another symmetry axis is the same
+    equations with the axes relabelled cyclically)."""
+    from ...core import codecache
+    from . import model as fm
+
+    def build():
+        return [fm.I1, fm.I3, fm.omega_symbols()[2]], fm.model().symmetric_precession_rate
+
+    value = codecache.cached_lambdify("free_top.symmetric_precession_rate", build, module="numpy")[0](
+        perp, axial, spin)
+    return float(np.ravel(np.asarray(value, dtype=float))[0])
 
 
 def _closed_form(scene: Any, solved: Solved) -> Any:
@@ -95,7 +113,7 @@ def _polhode(scene: Any, solved: Solved, t: np.ndarray) -> tuple[Any, Any]:
     return (found.period, found.estimate) if found.period is not None else (None, found.reason)
 
 
-def _precession(scene: Any) -> tuple[Any, Any]:
+def _precession(scene: Any, solved: Solved) -> tuple[Any, Any]:
     moments, w = _moments_and_omega(scene)
     equal = [(a, b) for a in range(3) for b in range(a + 1, 3) if moments[a] == moments[b]]
     if len(equal) != 1:
@@ -104,12 +122,20 @@ def _precession(scene: Any) -> tuple[Any, Any]:
         return None, why
     a = ({0, 1, 2} - set(equal[0])).pop()
     perp, Ia, wa = float(moments[equal[0][0]]), float(moments[a]), float(w[a])
-    body = wa * (perp - Ia) / perp
+    body = _symmetric_rate(perp, Ia, wa)
+    # in space: the closed form's precession of the body about L per polhode period (Π of the third kind),
+    # measured against |L|/I⊥ — the two must agree for a symmetric top, (3.60)
     L = float(np.linalg.norm(moments * w))
-    space = L / perp
-    error = {"body": 4 * _EPS * abs(wa) * (perp + Ia) / perp + 2 * _EPS * abs(body),
-             "space": 4 * _EPS * space}
-    return {"axis": a + 1, "body": body, "space": space}, max(error.values())
+    sol = _closed_form(scene, solved)
+    if sol is None or sol.kind != "elliptic" or not math.isfinite(sol.precession_per_period):
+        space, spread = L / perp, 4 * _EPS * L / perp
+        if sol is None or sol.kind != "steady":
+            return {"axis": a + 1, "body": body, "space": None}, "no closed form of this motion to measure φ̇ on"
+    else:
+        space = float(sol.precession_per_period) / float(sol.polhode_period)
+        spread = abs(space - L / perp)
+    error = max(4 * _EPS * abs(wa) * (perp + Ia) / perp + 2 * _EPS * abs(body), spread + 2 * _EPS * abs(space))
+    return {"axis": a + 1, "body": body, "space": space}, error
 
 
 def _stability(scene: Any) -> dict:
@@ -167,7 +193,7 @@ def summarize(scene: Any, solved: Solved, t: np.ndarray, names: tuple[str, ...])
             else:
                 out[name] = (0.5 * P, 0.5 * e)
         elif name == "precession_rate":
-            out[name] = _precession(scene)
+            out[name] = _precession(scene, solved)
         elif name == "stability":
             out[name] = (_stability(scene), None)
         elif name in ("energy", "angular_momentum"):

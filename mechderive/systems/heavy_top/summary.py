@@ -12,9 +12,11 @@ setup succeeds — and each estimate is *measured* on this motion:
   K by the AGM and Π by :func:`~mechderive.special.highprec.complete_pi_mp`, against Carlson's R_F
   and mpmath's own Π);
 * E, p_φ, p_ψ: the closed form's constants against the chapter's (3.63)-(3.65) at 40 digits;
-* the uniform precession's slow and fast rates: the roots of (3.80) at 40 digits; the scene's
-  φ̇ against the nearer one;
-* the sleeping top's threshold (3.83) ω3 = 2√(I1 M g l)/I3: the double's rounding.
+* the uniform precession's slow and fast rates: the model's derived roots of (3.80)
+  (``precession_rates``) at 40 digits, measured by a Newton step of the quadratic; the scene's φ̇
+  against the nearer one;
+* the sleeping top's threshold (3.83): the model's derived ``sleeping_threshold_spin`` (u2 = 1) at
+  40 digits, the estimate its rounding to a double.
 
 Where the closed form cannot follow the motion (:class:`~..base.OutOfReach`), θ_min, θ_max, the
 nutation period and the invariants are measured on the integrated trajectory; the rest is None
@@ -110,6 +112,24 @@ def _rounding(x_mp: Any) -> tuple[float, float]:
 
     x = float(x_mp)
     return x, float(abs(mpmath.mpf(x) - x_mp))
+
+
+_RATE_ARGS = ("I1", "I3", "M", "g", "l", "theta0", "omega3")
+
+
+def _derived(name: str, args: tuple[str, ...], member: int | None = None) -> Any:
+    """A derived quantity of the heavy-top model (``member`` of a tuple), compiled for mpmath once (disk cache)."""
+    from ...core import codecache
+    from . import model as hm
+
+    def build() -> tuple:
+        value = getattr(hm.model(), name)
+        symbols = {"I1": hm.I1, "I3": hm.I3, "M": hm.M, "g": hm.g, "l": hm.l, "theta0": hm.theta0,
+                   "omega3": hm.omega3}
+        return [symbols[a] for a in args], value if member is None else value[member]
+
+    label = f"heavy_top.summary.{name}" + ("" if member is None else f".{member}")
+    return codecache.cached_lambdify(label, build, module="mpmath")[0]
 
 
 class _Closed:
@@ -262,7 +282,11 @@ class _Closed:
         return self.sol.motion_class, None
 
     def _minimum_spin_mp(self) -> Any:
-        return 2 * self.mp.sqrt(self.I1 * self.mgl) / self.I3  # (3.83): ω3² > 4 I1 M g l / I3²
+        """The derived threshold (:attr:`.model.HeavyTopModel.sleeping_threshold_spin`: u2 = 1 of the sleeping
+        top's f(u), (3.83)) at 40 digits; only M g l enters, given as M with g = l = 1."""
+        with self.mp.workdps(40):
+            return _derived("sleeping_threshold_spin", ("I1", "I3", "M", "g", "l"))(
+                self.I1, self.I3, self.mgl, 1, 1)[0]
 
     def _sleeping(self) -> bool:
         return self.sol.initial["theta"] == 0.0 and self.sol.initial["theta_dot"] == 0.0
@@ -285,7 +309,8 @@ class _Closed:
             return {"kind": "sleeping", "omega3": w3, "minimum_spin": ms, "stable": abs(w3) > ms}, max(w3_err, ms_err)
         if th0 == math.pi:
             return {"kind": "hanging", "omega3": w3}, w3_err
-        # uniform precession: M g l = φ̇ (I3 ω3 - I1 φ̇ cos θ0) (3.80), a quadratic in φ̇ (Numerical Recipes 5.6)
+        # uniform precession: the two roots φ̇ of (3.80) as derived (:attr:`.model.HeavyTopModel.precession_rates`,
+        # free of cancellation), at 40 digits; the Newton step of the quadratic below measures them
         c = self.I1 * mp.cos(self.th0)
         B = self.I3 * self.w3
         disc = B * B - 4 * c * self.mgl
@@ -294,8 +319,10 @@ class _Closed:
         errs = [w3_err]
         rates = []
         if disc >= 0:
-            q = (B + (mp.sqrt(disc) if B >= 0 else -mp.sqrt(disc))) / 2
-            rates = [self.mgl / q] + ([q / c] if c != 0 else [])
+            args = (self.I1, self.I3, self.mgl, 1, 1, self.th0, self.w3)
+            with mp.workdps(40):
+                rates = [_derived("precession_rates", _RATE_ARGS, 0)(*args)[0]] + (
+                    [_derived("precession_rates", _RATE_ARGS, 1)(*args)[0]] if c != 0 else [])
             rates.sort(key=abs)
         for key, r in zip(("slow_precession", "fast_precession"), rates):
             out[key], e = _rounding(r)
