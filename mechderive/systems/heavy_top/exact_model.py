@@ -36,6 +36,12 @@ _kappa, _m = sp.symbols("kappa m", positive=True)
 _x = sp.Symbol("x", nonnegative=True)  # sn²
 
 
+def _is_zero_rational(expr: sp.Expr) -> bool:
+    """Whether ``expr`` is identically 0: by :func:`sympy.cancel` (exact and fast for the rational functions of
+    the roots and constants met here), else by :func:`sympy.simplify` (slow, for anything else)."""
+    return sp.cancel(expr) == 0 or sp.simplify(expr) == 0
+
+
 class HeavyTopExactModel(SymbolicModel):
     """Derived constants of u(t) and the partial fractions of φ̇ and ψ̇ along it."""
 
@@ -86,7 +92,7 @@ class HeavyTopExactModel(SymbolicModel):
                 raise DerivationError(f"expected a constant numerator, got {num}")
             c, n = num / d0, sp.factor(-d1 / d0)
             for k, (c_old, n_old) in enumerate(terms):
-                if sp.simplify(n - n_old) == 0:  # same pole: merge the numerators
+                if _is_zero_rational(n - n_old):  # same pole: merge the numerators
                     terms[k] = (c_old + c, n_old)
                     break
             else:
@@ -94,7 +100,7 @@ class HeavyTopExactModel(SymbolicModel):
         terms = [(sp.factor(c), n) for c, n in terms]
         # Check: the decomposition reproduces the rate identically in x.
         rebuilt = c0 + sum(c / (1 - n * _x) for c, n in terms)
-        if sp.simplify(sp.together(rebuilt - along)) != 0:
+        if not _is_zero_rational(sp.together(rebuilt - along)):
             raise DerivationError("partial fractions do not reproduce the rate")
         return {"c0": sp.factor(c0), "terms": terms}
 
