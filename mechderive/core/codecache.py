@@ -36,6 +36,7 @@ Location: ``$MECHDERIVE_CACHE_DIR``, else ``$XDG_CACHE_HOME/mechderive``, else
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import hashlib
 import importlib
@@ -193,6 +194,65 @@ def _store(name: str, module: str, source: str, meta: dict) -> None:
             cachefs.write_file(folder, file, cachefs.seal(file, text.encode("utf-8")))
 
 
+#: "name|module" -> pid of the forked child building it (:func:`prefetch`)
+_PREFETCH: dict[str, int] = {}
+#: seconds a process waits for a prefetching child before building the function itself
+PREFETCH_WAIT = 120.0
+
+
+def prefetch(jobs: Sequence[tuple[str, Callable[[], tuple[Sequence[Any], Any]], str]]) -> bool:
+    """Start building ``jobs`` ((name, build, module), as :func:`cached_lambdify` takes them) in a forked
+    child process that writes them to the disk cache, while this process goes on with other derivations:
+    a cold start uses a second core.  True if a child was started.
+
+    Only where it is safe and useful (and not turned off with ``MECHDERIVE_PARALLEL=0``): a POSIX fork, the
+    disk cache on, at least 2 cores, no other thread in this process (a fork copies no thread: a lock one of them held would stay held in the child), and some
+    job not on disk yet.  :func:`cached_lambdify` of a prefetched name waits for the child (at most
+    :data:`PREFETCH_WAIT` s, then builds it itself), loads the function from disk and logs it as
+    ``"parallel"``.  A child that fails leaves nothing behind but a missing file: the name is then built
+    here as if never prefetched.  The caller asks only for what its request needs (laziness holds).
+    """
+    if (not hasattr(os, "fork") or not disk_cache_enabled() or (os.cpu_count() or 1) < 2
+            or threading.active_count() > 1 or os.environ.get("MECHDERIVE_PARALLEL", "1") == "0"):
+        return False
+    todo = [(n, b, m) for n, b, m in jobs if f"{n}|{m}" not in _MEMORY and f"{n}|{m}" not in _PREFETCH
+            and not _path(n, m).exists()]
+    if not todo:
+        return False
+    sys.stdout.flush()
+    sys.stderr.flush()
+    pid = os.fork()
+    if pid == 0:  # the child: build, store, and leave without running the parent's exit handlers
+        status = 0
+        try:
+            for n, b, m in todo:
+                cached_lambdify(n, b, module=m)
+        except BaseException:  # noqa: BLE001 - the parent builds what is missing
+            status = 1
+        os._exit(status)
+    for n, _, m in todo:
+        _PREFETCH[f"{n}|{m}"] = pid
+    return True
+
+
+def _wait_for(pid: int) -> None:
+    """Wait for the prefetching child ``pid`` (reaped once; later waits return at once), at most PREFETCH_WAIT s."""
+    deadline = time.monotonic() + PREFETCH_WAIT
+    while True:
+        try:
+            done, _ = os.waitpid(pid, os.WNOHANG)
+        except ChildProcessError:  # reaped already (another of its names)
+            return
+        if done:
+            return
+        if time.monotonic() > deadline:
+            with contextlib.suppress(OSError):
+                os.kill(pid, 9)
+                os.waitpid(pid, 0)
+            return
+        time.sleep(0.005)
+
+
 def cached_lambdify(name: str, build: Callable[[], tuple[Sequence[Any], Any]], *,
                     module: str = "numpy") -> tuple[Callable[..., Any], dict]:
     """The function ``name`` for ``module`` ('numpy', 'mpmath' or 'math'), and its metadata.
@@ -211,9 +271,12 @@ def cached_lambdify(name: str, build: Callable[[], tuple[Sequence[Any], Any]], *
         return hit
     start = time.perf_counter()
     disk = disk_cache_enabled()
+    child = _PREFETCH.pop(key, None)
+    if child is not None:
+        _wait_for(child)
     loaded = _load(name, module) if disk else None
     if loaded is not None:
-        how = "disk"
+        how = "parallel" if child is not None else "disk"
     else:
         import numpy as np
         import sympy as sp

@@ -106,23 +106,32 @@ def _nutation_functions():
     return {"state": state, "f": cubic, "nutation": nutation, "gaps": gaps}
 
 
+def angle_function_jobs() -> list[tuple]:
+    """(name, build, module) of the partial fractions of φ̇ and ψ̇ (:func:`_angle_functions`), for
+    :func:`mechderive.core.codecache.prefetch`: a cold start derives them on a second core while this one
+    derives u(t)'s constants."""
+    return [(f"heavy_top.{which}", _fraction_build(which), "mpmath")
+            for which in ("precession_fractions", "spin_fractions")]
+
+
+def _fraction_build(which: str):
+    def inner():
+        from . import exact_model as em
+        from . import model as hm
+
+        fr = getattr(em.model(), which)
+        flat = [fr["c0"]] + [x for c, n in fr["terms"] for x in (c, n)]
+        return [hm.I1, hm.I3, hm.a, hm.b, em.u1, em.u2, em.u3], flat
+    return inner
+
+
 @functools.cache
 def _angle_functions():
     """Partial fractions of φ̇ and ψ̇ along u(t) — derived only when φ or ψ is asked for.
 
     Each is an mpmath function of (I1, I3, a, b, u1, u2, u3) returning [c0, c_1, n_1, c_2, n_2, ...].
     """
-    def build(which: str):
-        def inner():
-            from . import exact_model as em
-            from . import model as hm
-
-            fr = getattr(em.model(), which)
-            flat = [fr["c0"]] + [x for c, n in fr["terms"] for x in (c, n)]
-            return [hm.I1, hm.I3, hm.a, hm.b, em.u1, em.u2, em.u3], flat
-        return inner
-
-    return {name: cached_lambdify(f"heavy_top.{which}", build(which), module="mpmath")[0]
+    return {name: cached_lambdify(f"heavy_top.{which}", _fraction_build(which), module="mpmath")[0]
             for name, which in (("phi", "precession_fractions"), ("psi", "spin_fractions"))}
 
 

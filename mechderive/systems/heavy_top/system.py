@@ -146,6 +146,10 @@ _DIRECT = {"theta": "theta", "phi": "phi", "psi": "psi", "theta_dot": "theta_dot
            "psi_dot": "psi_dot", "u": "u"}
 
 
+#: what the closed form evaluates without φ̇ and ψ̇'s partial fractions
+_ANGLE_FREE = frozenset({"u", "u_dot", "theta", "theta_dot", "phi_dot", "psi_dot"})
+
+
 def _needs(names: tuple[str, ...]) -> list[str]:
     need: list[str] = []
     for q in names:
@@ -212,6 +216,13 @@ def _exact(scene: "Scene", t: np.ndarray) -> Solved:
     from .exact import exact_heavy_top
 
     scaled = units_of(scene)
+    need = _needs(scene.quantities)
+    if any(k not in _ANGLE_FREE for k in need):
+        # φ̇ and ψ̇'s partial fractions will be needed: derived on a second core meanwhile (cold start only)
+        from ...core.codecache import prefetch
+        from .exact import angle_function_jobs
+
+        prefetch(angle_function_jobs())
     try:
         top = exact_heavy_top(scene.parameters, scene.initial, strict=scene.strict)
     except InvalidInputError as exc:
@@ -221,7 +232,6 @@ def _exact(scene: "Scene", t: np.ndarray) -> Solved:
             f"scene key [time].t_end: expected at most {scaled.seconds(top.t_max):.6g} s for this motion in closed "
             f"form (2^51 nutation periods of {scaled.seconds(top.nutation_period):.6g} s: beyond, the period count "
             f"is no longer an exact integer in double precision), got {scaled.original.t_end!r}")
-    need = _needs(scene.quantities)
     values, ps = top._evaluate(t, need)
     cols = _columns(scene.quantities, values, _solver_parameters(scene))
 
