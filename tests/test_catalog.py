@@ -201,8 +201,35 @@ def test_verify_console_table_runs():
 def test_verify_jobs_gives_the_same_rows_in_the_same_order(capsys):
     rows = {}
     for jobs in ("1", "2"):
-        assert main(["verify", "--section", "3.4", "--json", "--jobs", jobs]) == 0
+        assert main(["verify", "--section", "3.4", "--json", "--jobs", jobs, "--fresh"]) == 0
         rows[jobs] = [{k: v for k, v in r.items() if k != "seconds"} for r in json.loads(capsys.readouterr().out)]
     assert rows["1"] == rows["2"] and len({r["section"] for r in rows["1"]}) > 1  # several sections, two processes
     assert main(["verify", "--jobs", "0"]) == 2
     assert "--jobs: expected an integer in [1, 64], got 0" in capsys.readouterr().err
+
+
+def test_verify_replays_an_unchanged_packages_table_and_fresh_checks_again(tmp_path, monkeypatch, capsys):
+    monkeypatch.setenv("MECHDERIVE_CACHE_DIR", str(tmp_path))
+    monkeypatch.delenv("MECHDERIVE_NO_DISK_CACHE", raising=False)
+    assert main(["verify", "--section", "3.3", "--jobs", "1"]) == 0
+    first = capsys.readouterr()
+    assert main(["verify", "--section", "3.3", "--jobs", "2"]) == 0  # --jobs does not change the table
+    again = capsys.readouterr()
+    assert again.out == first.out and "replayed from the disk cache" in again.err
+    assert main(["verify", "--section", "3.3", "--fresh"]) == 0
+    fresh = capsys.readouterr()
+    assert "replayed" not in fresh.err and fresh.out.splitlines()[-1] == first.out.splitlines()[-1].replace(
+        first.out.splitlines()[-1].rsplit(" in ", 1)[1], fresh.out.splitlines()[-1].rsplit(" in ", 1)[1])
+
+
+def test_a_changed_catalog_is_not_replayed(tmp_path, monkeypatch, capsys):
+    monkeypatch.setenv("MECHDERIVE_CACHE_DIR", str(tmp_path))
+    monkeypatch.delenv("MECHDERIVE_NO_DISK_CACHE", raising=False)
+    assert main(["verify", "--section", "3.3", "--jobs", "1"]) == 0
+    capsys.readouterr()
+    plain = Claim("0.1", "3.3", "a true claim", "symbolic", printed=lambda: sp.Integer(1),
+                  check=lambda f: Outcome(f == 1, "1 = 1"))
+    _only(monkeypatch, plain)
+    assert main(["verify", "--section", "3.3", "--jobs", "1"]) == 0
+    out = capsys.readouterr()
+    assert "replayed" not in out.err and "1 claims:" in out.out

@@ -71,16 +71,19 @@ class _Tee(io.TextIOBase):
 
 
 def cached(kind: str, args: argparse.Namespace, command: Callable[[argparse.Namespace], int],
-           *, keep: tuple[int, ...] = (0,), files: tuple[str, ...] = ()) -> int:
+           *, keep: tuple[int, ...] = (0,), files: tuple[str, ...] = (), ignore: tuple[str, ...] = (),
+           replayed: str = "", parts: tuple = ()) -> int:
     """Run ``command(args)``, or print its stored answer: the stdout and status of an earlier identical run.
 
     ``files`` name the attributes of ``args`` that are paths whose contents the answer depends on
-    (besides the system or scene); an answer is stored only when its status is in ``keep``.
+    (besides the system or scene), ``ignore`` those that do not change the answer (``--jobs``); an answer
+    is stored only when its status is in ``keep``; ``replayed`` is said on stderr when one is replayed;
+    ``parts`` are more of what the answer depends on (the claims ``verify`` checks).
     """
     from ..core import textcache
 
-    target = _builtin_target(args.system)
-    parts: list = [target] if target is not None else []
+    target = _builtin_target(args.system) if hasattr(args, "system") else kind
+    parts = [target, *parts] if target is not None else []
     for attr in files:
         path = getattr(args, attr, None)
         if path is None:
@@ -95,11 +98,14 @@ def cached(kind: str, args: argparse.Namespace, command: Callable[[argparse.Name
         parts.append(data)
     if target is None:
         return command(args)
-    options = {k: v for k, v in sorted(vars(args).items()) if k not in ("run", "system") and not callable(v)}
+    options = {k: v for k, v in sorted(vars(args).items())
+               if k not in ("run", "system", *ignore) and not callable(v)}
     name = textcache.key(kind, [*parts, options])
     hit = textcache.lookup(name)
     if hit is not None:
         sys.stdout.write(hit[0])
+        if replayed:
+            sys.stderr.write(replayed + "\n")
         return hit[1]
     tee = _Tee(sys.stdout)
     with contextlib.redirect_stdout(tee):
