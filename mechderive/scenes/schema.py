@@ -207,42 +207,35 @@ def waived(scene: "Scene") -> list[str]:
     return list(scene.model.waived(scene.parameters))
 
 
-def _quantity_list(system: str, value: Any, allowed: tuple[str, ...]) -> tuple[str, ...]:
-    if not isinstance(value, (list, tuple)) or not value:
-        _fail("[output].quantities", f"a non-empty list of quantity names (for {system}: {_one_of(allowed)})",
-              value)
+def _name_list(key: str, what: str, system: str, value: Any, allowed: tuple[str, ...], *,
+               empty: bool) -> tuple[str, ...]:
+    """``[output].<key>``: a list of the system's ``what`` names (``allowed``), each once; empty if ``empty``."""
+    if not isinstance(value, (list, tuple)) or (not value and not empty):
+        _fail(f"[output].{key}", f"a {'' if empty else 'non-empty '}list of {what} names (for {system}: "
+              f"{_one_of(allowed) if allowed else 'none'})", value)
     seen: set[str] = set()
     for i, q in enumerate(value):
-        where = f"[output].quantities[{i}]"
+        where = f"[output].{key}[{i}]"
         if not isinstance(q, str):
-            _fail(where, "a quantity name (a string)", q)
+            _fail(where, f"a {what} name (a string)", q)
         if q not in allowed:
-            raise InvalidInputError(f"scene key {where}: unknown quantity {_show(q)} for system {system!r}; "
-                                    f"expected one of {_one_of(allowed)}")
+            expected = f"one of {_one_of(allowed)}" if allowed else f"none: this system has no {what}s"
+            raise InvalidInputError(f"scene key {where}: unknown {what} {_show(q)} for system {system!r}; "
+                                    f"expected {expected}")
         if q in seen:
-            raise InvalidInputError(f"scene key {where}: duplicate quantity {q!r}; each may appear once")
+            raise InvalidInputError(f"scene key {where}: duplicate {what} {q!r}; each may appear once")
         seen.add(q)
     return tuple(value)
+
+
+def _quantity_list(system: str, value: Any, allowed: tuple[str, ...]) -> tuple[str, ...]:
+    """``[output].quantities``: a non-empty list of the system's output columns, each once."""
+    return _name_list("quantities", "quantity", system, value, allowed, empty=False)
 
 
 def _summary_list(system: str, value: Any, allowed: tuple[str, ...]) -> tuple[str, ...]:
     """``[output].summary``: a list (possibly empty) of the system's per-motion quantity names, each once."""
-    if not isinstance(value, (list, tuple)):
-        _fail("[output].summary", "a list of per-motion quantity names (for "
-              f"{system}: {_one_of(allowed) if allowed else 'none'})", value)
-    seen: set[str] = set()
-    for i, q in enumerate(value):
-        where = f"[output].summary[{i}]"
-        if not isinstance(q, str):
-            _fail(where, "a per-motion quantity name (a string)", q)
-        if q not in allowed:
-            expected = f"one of {_one_of(allowed)}" if allowed else "none: this system has no per-motion quantities"
-            raise InvalidInputError(f"scene key {where}: unknown per-motion quantity {_show(q)} for system "
-                                    f"{system!r}; expected {expected}")
-        if q in seen:
-            raise InvalidInputError(f"scene key {where}: duplicate per-motion quantity {q!r}; each may appear once")
-        seen.add(q)
-    return tuple(value)
+    return _name_list("summary", "per-motion quantity", system, value, allowed, empty=True)
 
 
 def _in_si(table: str, values: Mapping[str, Any], keys: tuple[Key, ...], given: dict[str, str]) -> dict[str, Any]:
