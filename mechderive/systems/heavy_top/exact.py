@@ -106,12 +106,14 @@ def _nutation_functions():
     return {"state": state, "f": cubic, "nutation": nutation, "gaps": gaps}
 
 
-def angle_function_jobs() -> list[tuple]:
-    """(name, build, module) of the partial fractions of φ̇ and ψ̇ (:func:`_angle_functions`), for
-    :func:`mechderive.core.codecache.prefetch`: a cold start derives them on a second core while this one
-    derives u(t)'s constants."""
-    return [(f"heavy_top.{which}", _fraction_build(which), "mpmath")
-            for which in ("precession_fractions", "spin_fractions")]
+def angle_function_jobs(*, angles: bool = True, rates: bool = True) -> list[tuple]:
+    """(name, build, module) of what φ and ψ need beyond u(t): the partial fractions of φ̇ and ψ̇
+    (:func:`_angle_functions`, with ``angles``) and the rates near the poles (:func:`_derived_rates`, with
+    ``rates``: φ̇, ψ̇ and the angles' error estimate), for :func:`mechderive.core.codecache.prefetch`: a cold
+    start derives them on a second core while this one derives u(t)'s constants."""
+    jobs = [(f"heavy_top.{which}", _fraction_build(which), "mpmath")
+            for which in ("precession_fractions", "spin_fractions")] if angles else []
+    return jobs + ([("heavy_top.rates_near_poles", _rates_build, "numpy")] if rates else [])
 
 
 def _fraction_build(which: str):
@@ -174,18 +176,19 @@ def _derived_rates():
     symbolically, so the 1/(1 − u) spike of a near pole passage (1/(1 + u) near the bottom) is
     absent from the one it cancels in, not cancelled in floating point.
     """
-    def build():
-        import sympy as sp
+    return cached_lambdify("heavy_top.rates_near_poles", _rates_build, module="numpy")[0]
 
-        from . import model as hm
 
-        phi_dot, psi_dot = hm.model().rates_near_poles
-        x, y = sp.symbols("x_pole y_bottom", real=True)
-        half = [sp.collect(sp.expand((phi_dot + s * psi_dot) / 2), [x, y], sp.factor) for s in (1, -1)]
-        dm, dp = sp.symbols("d_minus d_plus", real=True)
-        return [hm.I1, hm.I3, dm, dp, x, y], [phi_dot, psi_dot, *half]
+def _rates_build():
+    import sympy as sp
 
-    return cached_lambdify("heavy_top.rates_near_poles", build, module="numpy")[0]
+    from . import model as hm
+
+    phi_dot, psi_dot = hm.model().rates_near_poles
+    x, y = sp.symbols("x_pole y_bottom", real=True)
+    half = [sp.collect(sp.expand((phi_dot + s * psi_dot) / 2), [x, y], sp.factor) for s in (1, -1)]
+    dm, dp = sp.symbols("d_minus d_plus", real=True)
+    return [hm.I1, hm.I3, dm, dp, x, y], [phi_dot, psi_dot, *half]
 
 
 @dataclass(frozen=True)

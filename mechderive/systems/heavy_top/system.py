@@ -217,12 +217,13 @@ def _exact(scene: "Scene", t: np.ndarray) -> Solved:
 
     scaled = units_of(scene)
     need = _needs(scene.quantities)
-    if any(k not in _ANGLE_FREE for k in need):
-        # φ̇ and ψ̇'s partial fractions will be needed: derived on a second core meanwhile (cold start only)
+    angles = any(k not in _ANGLE_FREE for k in need)
+    if angles or "phi_dot" in need or "psi_dot" in need:
+        # φ̇ and ψ̇'s partial fractions and rates will be needed: derived on a second core meanwhile (cold start)
         from ...core.codecache import prefetch
         from .exact import angle_function_jobs
 
-        prefetch(angle_function_jobs())
+        prefetch(angle_function_jobs(angles=angles))
     try:
         top = exact_heavy_top(scene.parameters, scene.initial, strict=scene.strict)
     except InvalidInputError as exc:
