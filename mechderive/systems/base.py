@@ -43,7 +43,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..scenes.schema import Scene
     from .scaling import Scaled
 
-__all__ = ["Key", "Quantity", "Solved", "OutOfReach", "System", "Derivation", "Derivations"]
+__all__ = ["BatchSummary", "Key", "Quantity", "Solved", "OutOfReach", "System", "Derivation", "Derivations"]
 
 
 @dataclass(frozen=True)
@@ -84,6 +84,21 @@ class Solved(NamedTuple):
     columns: dict
     info: dict
     solution: Any
+
+
+class BatchSummary(NamedTuple):
+    """What :meth:`System.summarize_batch` returns for N points (a sweep's chunk).
+
+    ``values[name]``: a float64 array (numeric quantities) or an object array of str (a class), N
+    long; ``errors[name]``: each point's measured estimate (float64); ``fallback``: a bool array,
+    True where the batch did not answer (a point refused, ill-conditioned, a quantity that does not
+    apply or is not a plain number): the sweep computes those points one by one through the planner,
+    which gives the value, the estimate or the reason.  Values at fallback points are ignored.
+    """
+
+    values: dict
+    errors: dict
+    fallback: Any
 
 
 class OutOfReach(InvalidInputError):
@@ -232,6 +247,19 @@ class System:
             raise InvalidInputError(f"system {self.name!r} has no per-motion quantities "
                                     f"(asked for {', '.join(names)})")
         return {}
+
+    def summarize_batch(self, parameters: Mapping[str, "np.ndarray"], initial: Mapping[str, "np.ndarray"],
+                        names: tuple[str, ...], *, strict: bool = True) -> BatchSummary | None:
+        """The per-motion quantities ``names`` of N motions at once (a sweep's chunk), or None.
+
+        ``parameters`` and ``initial`` map the scene's keys (SI, as :class:`~mechderive.scenes.schema.Scene`
+        holds them after checking) to arrays of N values (a vector key such as the free top's ``omega``
+        to an (N, 3) array).  A system with a closed form vectorises its setup here; every value it
+        answers must equal :meth:`summarize`'s for the same point to 1e-12 relative, and each point it
+        cannot answer so is marked ``fallback``.  None (the default): the sweep runs every point
+        through the planner.
+        """
+        return None
 
     def period(self, scene: "Scene") -> float | None:
         """The period (s) of the scene's motion, known before solving — the heavy top's nutation period,
