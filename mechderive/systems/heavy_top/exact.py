@@ -73,36 +73,43 @@ __all__ = ["HeavyTopSolution", "exact_heavy_top"]
 _DPS = 40
 
 
+def _build_state():
+    from . import model as hm
+
+    cfs = hm.model().constants_from_state
+    return [*hm.PARAMETERS, *hm.STATE], [cfs[k] for k in (hm.a, hm.b, hm.alpha, hm.beta)]
+
+
+def _build_f():
+    from . import model as hm
+
+    return [hm.a, hm.b, hm.alpha, hm.beta], list(hm.model().f_coefficients)
+
+
+def _build_nutation():
+    from . import exact_model as em
+    from . import model as hm
+
+    nut = em.model().nutation_constants
+    return [hm.beta, em.u1, em.u2, em.u3], [nut["kappa2"], nut["m"], nut["m1"]]
+
+
+def _build_gaps():
+    from . import model as hm
+
+    return [*hm.PARAMETERS, *hm.STATE], list(hm.model().passage_factors)
+
+
+#: (label, build) of u(t)'s derived constants; compiled for mpmath here, for NumPy by :mod:`.batch`
+NUTATION_BUILDS = (("heavy_top.constants_from_state", _build_state), ("heavy_top.passage_factors", _build_gaps),
+                   ("heavy_top.f_coefficients", _build_f), ("heavy_top.nutation_constants", _build_nutation))
+
+
 @functools.cache
 def _nutation_functions():
     """The derived constants of u(t) as mpmath functions, compiled once (through the disk cache)."""
-    def build_state():
-        from . import model as hm
-
-        cfs = hm.model().constants_from_state
-        return [*hm.PARAMETERS, *hm.STATE], [cfs[k] for k in (hm.a, hm.b, hm.alpha, hm.beta)]
-
-    def build_f():
-        from . import model as hm
-
-        return [hm.a, hm.b, hm.alpha, hm.beta], list(hm.model().f_coefficients)
-
-    def build_nutation():
-        from . import exact_model as em
-        from . import model as hm
-
-        nut = em.model().nutation_constants
-        return [hm.beta, em.u1, em.u2, em.u3], [nut["kappa2"], nut["m"], nut["m1"]]
-
-    def build_gaps():
-        from . import model as hm
-
-        return [*hm.PARAMETERS, *hm.STATE], list(hm.model().passage_factors)
-
-    state, _ = cached_lambdify("heavy_top.constants_from_state", build_state, module="mpmath")
-    gaps, _ = cached_lambdify("heavy_top.passage_factors", build_gaps, module="mpmath")
-    cubic, _ = cached_lambdify("heavy_top.f_coefficients", build_f, module="mpmath")
-    nutation, _ = cached_lambdify("heavy_top.nutation_constants", build_nutation, module="mpmath")
+    state, gaps, cubic, nutation = (cached_lambdify(label, build, module="mpmath")[0]
+                                    for label, build in NUTATION_BUILDS)
     return {"state": state, "f": cubic, "nutation": nutation, "gaps": gaps}
 
 

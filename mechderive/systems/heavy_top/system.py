@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any, Callable, Mapping
 import numpy as np
 
 from ...errors import InvalidInputError
-from ..base import Key, OutOfReach, Quantity, Solved, System
+from ..base import BatchSummary, Key, OutOfReach, Quantity, Solved, System
 from ..scene_keys import (SCENE_STRICT_HINT, at, check_keys, number, one_of, rename_keys)
 from . import parameters as heavy_top_parameters
 from .summary import SUMMARIES
@@ -609,6 +609,14 @@ class HeavyTop(System):
         from .summary import summarize
 
         return summarize(scene, solved, t, names)
+
+    def summarize_batch(self, parameters: Mapping[str, np.ndarray], initial: Mapping[str, np.ndarray],
+                        names: tuple[str, ...], *, strict: bool = True) -> BatchSummary | None:
+        """Turning angles, roots, nutation period, precession, class and invariants of N tops at once, in
+        NumPy from the derived constants (:mod:`.batch`); the ill-conditioned points go one by one."""
+        from .batch import summarize_batch
+
+        return summarize_batch(parameters, initial, names, strict=strict)
 
     def period(self, scene: "Scene") -> float | None:
         """The nutation period 2K(m)/κ (s) from the closed form's setup; None where steady or out of its reach."""
