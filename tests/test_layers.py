@@ -46,6 +46,7 @@ LAYERS: dict[str, int] = {
     "mechderive.solvers": 3,
     "mechderive.systems": 4,
     "mechderive.scenes": 5,
+    "mechderive.sweeps": 5,
     "mechderive.derive": 5,
     "mechderive.formulas": 5,
     "mechderive.catalog": 5,

@@ -1,4 +1,5 @@
-"""The ``mechderive`` command line: ``run``, ``scenes``, ``verify``, ``derive``, ``check``, ``bench``, ``stress``.
+"""The ``mechderive`` command line: ``run``, ``scenes``, ``verify``, ``derive``, ``check``, ``bench``, ``stress``,
+``sweep``.
 
 Options may come before, between or after a subcommand's positional arguments
 (``mechderive derive heavy_top --format latex lagrangian``): :func:`main` hands
@@ -89,7 +90,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     # Each subcommand module registers itself; imported here, not at package import, so that
     # `import mechderive.cli` stays light.
-    from . import bench, check, derive, run, stress, verify
+    from . import bench, check, derive, run, stress, sweep, verify
 
     run.add_parsers(sub)  # run, scenes
     verify.add_parser(sub)
@@ -97,6 +98,7 @@ def build_parser() -> argparse.ArgumentParser:
     check.add_parser(sub)
     bench.add_parser(sub)
     stress.add_parser(sub)
+    sweep.add_parser(sub)
     return parser
 
 
