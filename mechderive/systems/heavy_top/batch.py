@@ -9,8 +9,9 @@ evaluated over all points in double precision:
   single path clamps them (u1 ≤ cos θ0 ≤ u2, within [-1, 1]), and polished by two Newton steps;
 * the nutation period 2K(m)/κ, K = K(m) from 1 - m (SciPy's ``ellipkm1``: no cancellation near the
   separatrix);
-* Δφ per period (c0/κ)·2K + Σ (c_i/κ)·2Π(n_i | m) with Π(n | m) = R_F(0, 1-m, 1) + (n/3) R_J(0, 1-m, 1, 1-n)
-  (DLMF 19.25.2, Carlson's integrals from SciPy);
+* Δφ per period (2/κ)[c0 K + Σ c_i Π(n_i | m)] with Π(n | m) = K + (n/3) R_J(0, 1-m, 1, 1-n)
+  (DLMF 19.25.2, Carlson's R_J from SciPy), regrouped as (2/κ)[φ̇(u1) K + Σ (c_i n_i/3) R_J]: the c_i of
+  a fast top are large and cancel, φ̇ at the turning point does not;
 * θ_min, θ_max = 2 atan2(√(1 ∓ u), √(1 ± u)); figure 44's class by the single path's rule (:func:`.exact.classify`);
 * E, p_φ, p_ψ by the derived invariants.
 
@@ -61,24 +62,70 @@ _N_MARGIN = 1e-3
 @functools.cache
 def _functions() -> dict[str, Any]:
     """The derived constants compiled for NumPy (disk cache: derived and compiled once per install)."""
+    import sympy as sp  # noqa: F401  (only inside the builds, on a cold cache)
+
     from ...core.codecache import cached_lambdify
     from . import exact
     from . import model as hm
 
-    out = {key: cached_lambdify(label, build, module="numpy")[0]
-           for key, (label, build) in zip(("state", "gaps", "f", "nutation"), exact.NUTATION_BUILDS)}
+    def build_state():
+        return exact._build_state()
 
-    def build_f_state():
-        return [*hm.PARAMETERS, *hm.STATE], list(hm.model().f_coefficients_state)
+    def build_taylor():
+        from ...core.rounding import magnitude
+        from . import exact_model as em
+
+        coeffs = list(em.model().f_taylor_state)
+        return [*hm.PARAMETERS, *hm.STATE], coeffs + [magnitude(c) for c in coeffs]
+
+    def build_shift_values():
+        from . import exact_model as em
+
+        fr = em.model().precession_fractions_shifted
+        return [*hm.PARAMETERS, *hm.STATE], [fr["values"][s] for s in fr["args"][3:-2]]
+
+    def build_fractions():
+        import sympy as sp
+
+        from ...core.rounding import magnitude
+        from . import exact_model as em
+
+        # Δφ per period = (2/κ)[c0 K + Σ c_i Π(n_i | m)] with Π = K + (n/3) R_J (DLMF 19.25.2), regrouped as
+        # (2/κ)[(c0 + Σ c_i) K + Σ (c_i n_i / 3) R_J(0, 1 − m, 1, 1 − n_i)]: c0 + Σ c_i is φ̇ at the turning
+        # point u1, small for a fast top whose terms c_i are large and cancel (by ~a/φ̇, 10² to 10³)
+        fr = em.model().precession_fractions_shifted
+        at_u1 = sp.factor(sp.together(fr["c0"] + sum(c for c, _ in fr["terms"])))
+        flat = [at_u1] + [x for c, n in fr["terms"] for x in (sp.factor(c * n / 3), n)]
+        sizes = [magnitude(at_u1)] + [magnitude(sp.factor(c * n / 3)) for c, n in fr["terms"]]
+        return fr["args"], flat + sizes
+
+    def build_nutation():
+        import sympy as sp
+
+        from . import exact_model as em
+
+        args, exprs = exact._build_nutation()
+        shift = sp.Symbol("shift", real=True)
+        moved = {em.u1: em.u1 + shift, em.u2: em.u2 + shift, em.u3: em.u3 + shift}
+        for e in exprs:  # κ², m, 1 − m depend on the roots' differences only: they take w1, w2, w3 as well
+            if sp.simplify(e.subs(moved, simultaneous=True) - e) != 0:
+                from ...errors import DerivationError
+
+                raise DerivationError(f"expected κ², m of the nutation invariant under a shift of the roots, got {e}")
+        return args, exprs
+
+    builds = {"state": ("heavy_top.constants_from_state", build_state),
+              "taylor": ("heavy_top.f_taylor_state", build_taylor),
+              "shift_values": ("heavy_top.shift_values", build_shift_values),
+              "fractions": ("heavy_top.precession_fractions_shifted", build_fractions),
+              "nutation": ("heavy_top.nutation_constants_shifted", build_nutation)}
+    out = {key: cached_lambdify(label, build, module="numpy")[0] for key, (label, build) in builds.items()}
 
     def build_invariants():
         m = hm.model()
         return [*hm.PARAMETERS, *hm.STATE], [m.energy, m.azimuthal_momentum, m.spin_momentum]
 
-    out["f_state"] = cached_lambdify("heavy_top.f_coefficients_state", build_f_state, module="numpy")[0]
     out["invariants"] = cached_lambdify("heavy_top.invariants_state", build_invariants, module="numpy")[0]
-    out["phi_fractions"] = cached_lambdify("heavy_top.precession_fractions",
-                                           exact._fraction_build("precession_fractions"), module="numpy")[0]
     return out
 
 
@@ -104,36 +151,45 @@ def _valid(p: dict[str, np.ndarray], s: dict[str, np.ndarray], strict: bool) -> 
     return ok
 
 
-def _roots(c: list[np.ndarray], u0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Roots (N, 3) of c3 u³ + c2 u² + c1 u + c0, sorted, and each one's last Newton step (N, 3)."""
-    c3, c2, c1, c0 = c
-    n = len(c0)
-    companion = np.zeros((n, 3, 3))
-    companion[:, 0, :] = -np.stack([c2, c1, c0], axis=1) / c3[:, None]
-    companion[:, 1, 0] = companion[:, 2, 1] = 1.0
-    with np.errstate(all="ignore"):
-        r = np.sort(np.linalg.eigvals(companion).real, axis=1)
-    # as the single path: u1 ≤ u0 ≤ u2 (u0 is inside the motion), both in [-1, 1]
-    r[:, 1] = np.minimum(np.maximum(r[:, 1], u0), 1.0)
-    r[:, 0] = np.maximum(np.minimum(r[:, 0], u0), -1.0)
+def _newton(c: list[np.ndarray], r: np.ndarray, steps: int = 2) -> tuple[np.ndarray, np.ndarray]:
+    """Roots ``r`` (N, 3) of the cubic ``c`` (coefficients of w³, w², w, 1) polished by Newton; the last step."""
+    c3, c2, c1, c0 = (x[:, None] for x in c)
     step = np.zeros_like(r)
     with np.errstate(all="ignore"):
-        for _ in range(2):
-            fx = ((c3[:, None] * r + c2[:, None]) * r + c1[:, None]) * r + c0[:, None]
-            d = (3 * c3[:, None] * r + 2 * c2[:, None]) * r + c1[:, None]
-            step = np.where(d != 0, fx / d, 0.0)
+        for _ in range(steps):
+            d = (3 * c3 * r + 2 * c2) * r + c1
+            step = np.where(d != 0, (((c3 * r + c2) * r + c1) * r + c0) / d, 0.0)
+            step = np.where(np.isfinite(step), step, 0.0)
             r = r - step
     return r, np.abs(step)
 
 
-def _polish(c: list[np.ndarray], r: np.ndarray) -> np.ndarray:
-    """Roots ``r`` (N, 3) of a nearby cubic moved to those of ``c`` by two Newton steps."""
-    c3, c2, c1, c0 = (x[:, None] for x in c)
+def _roots(c: list[np.ndarray], lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Roots w1 ≤ w2 ≤ w3 (N, 3) of f(u0 + w) (coefficients ``c`` of w³, w², w, 1) and each one's last Newton
+    step.  w = 0 lies in [w1, w2] (u0 is inside the motion) and [u1, u2] in [-1, 1] (w in [``lo``, ``hi``]):
+    clamped there as the single path clamps.  Where f(u0) = 0 exactly (θ̇0 = 0: the start is a turning
+    point) w = 0 is a root and the other two come from the deflated quadratic without cancellation."""
+    c3, c2, c1, c0 = c
+    n = len(c0)
+    companion = np.zeros((n, 3, 3))
     with np.errstate(all="ignore"):
-        for _ in range(2):
-            d = (3 * c3 * r + 2 * c2) * r + c1
-            r = r - np.where(d != 0, (((c3 * r + c2) * r + c1) * r + c0) / d, 0.0)
-    return r
+        companion[:, 0, :] = -np.stack([c2, c1, c0], axis=1) / c3[:, None]
+    companion[:, 1, 0] = companion[:, 2, 1] = 1.0
+    companion[~np.isfinite(companion)] = 0.0
+    r = np.sort(np.linalg.eigvals(companion).real, axis=1)
+    at_turning = c0 == 0
+    if at_turning.any():
+        with np.errstate(all="ignore"):
+            # c3 w² + c2 w + c1 = 0 (Numerical Recipes 5.6)
+            disc = np.sqrt(np.maximum(c2 * c2 - 4 * c3 * c1, 0.0))
+            q = -(c2 + np.copysign(disc, c2)) / 2
+            pair = np.sort(np.stack([q / c3, np.where(q != 0, c1 / q, 0.0)], axis=1), axis=1)
+        r[at_turning] = np.sort(np.concatenate([np.zeros((at_turning.sum(), 1)), pair[at_turning]], axis=1), axis=1)
+    r, step = _newton(c, r)
+    r[at_turning] = np.where(np.abs(r[at_turning]) < 1e-300, 0.0, r[at_turning])
+    r[:, 1] = np.minimum(np.maximum(r[:, 1], 0.0), hi)
+    r[:, 0] = np.maximum(np.minimum(r[:, 0], 0.0), lo)
+    return r, step
 
 
 def _pi(n: np.ndarray, one_minus_n: np.ndarray, m1: np.ndarray) -> np.ndarray:
@@ -144,33 +200,41 @@ def _pi(n: np.ndarray, one_minus_n: np.ndarray, m1: np.ndarray) -> np.ndarray:
     return elliprf(zero, m1, 1.0) + n / 3 * elliprj(zero, m1, 1.0, one_minus_n)
 
 
-def _pipeline(F: dict, P: list, a: np.ndarray, b: np.ndarray, beta: np.ndarray, r: np.ndarray,
+def _pipeline(F: dict, P: list, a: np.ndarray, beta: np.ndarray, shift: list[np.ndarray], w: np.ndarray,
               want_advance: bool) -> dict[str, np.ndarray]:
-    """T, Δφ, θ_min, θ_max (and what they are made of) from the roots ``r`` (N, 3)."""
+    """T, Δφ, θ_min, θ_max (and what they are made of) from the roots ``w`` (N, 3) of f(u0 + w)."""
     from scipy.special import ellipkm1
 
-    u1, u2, u3 = r[:, 0], r[:, 1], r[:, 2]
-    n = len(u1)
+    rate0, d_bottom, d_pole = shift
+    w1, w2, w3 = w[:, 0], w[:, 1], w[:, 2]
+    n = len(w1)
     with np.errstate(all="ignore"):
-        kappa2, m, m1 = _columns(F["nutation"], (beta, u1, u2, u3), n)
+        kappa2, m, m1 = _columns(F["nutation"], (beta, w1, w2, w3), n)
         kappa = np.sqrt(kappa2)
         K = ellipkm1(m1)
+        # θ from 1 ∓ u = (1 ∓ u0) ∓ w: exact at the poles (d_pole = u0 − 1, d_bottom = u0 + 1 in the half angle)
         out = {"kappa": kappa, "m": m, "m1": m1, "K": K, "T": 2 * K / kappa,
-               "theta_min": 2 * np.arctan2(np.sqrt(1 - u2), np.sqrt(1 + u2)),
-               "theta_max": 2 * np.arctan2(np.sqrt(1 - u1), np.sqrt(1 + u1))}
+               "theta_min": 2 * np.arctan2(np.sqrt(np.maximum(-d_pole - w2, 0)), np.sqrt(d_bottom + w2)),
+               "theta_max": 2 * np.arctan2(np.sqrt(np.maximum(-d_pole - w1, 0)), np.sqrt(d_bottom + w1))}
         if want_advance:
-            flat = _columns(F["phi_fractions"], (P[0], P[1], a, b, u1, u2, u3), n)
-            advance = flat[0] / kappa * 2 * K
-            spread = np.abs(advance)
+            from scipy.special import elliprj
+
+            flat = _columns(F["fractions"], (P[0], P[1], a, rate0, d_bottom, d_pole, w1, w2 - w1), n)
+            k = (len(flat) - 1) // 3
+            pairs, sizes = flat[1:1 + 2 * k], flat[1 + 2 * k:]
+            term = flat[0] * 2 * K / kappa
+            advance = term
+            spread = np.abs(term) * np.where(flat[0] != 0, sizes[0] / np.abs(flat[0]), 1.0)
             n_margin = np.full(n, np.inf)
             rounding = np.zeros(n)
-            for c, nn in zip(flat[1::2], flat[2::2]):
+            for c, nn, size in zip(pairs[0::2], pairs[1::2], sizes[1:]):
                 one_minus_n = 1 - nn
-                term = c / kappa * 2 * _pi(nn, one_minus_n, m1)
+                term = c * 2 * elliprj(np.zeros(n), m1, 1.0, one_minus_n) / kappa
                 advance = advance + term
-                spread = spread + np.abs(term)
+                # each term's rounding: its coefficient's terms' sizes, then ~ε in R_J and the product
+                spread = spread + np.abs(term) * np.where(c != 0, size / np.abs(c), 1.0)
                 n_margin = np.minimum(n_margin, one_minus_n)
-                # n's rounding, amplified in Π by ~1/(1 - n)
+                # n's rounding, amplified in R_J by ~1/(1 - n)
                 rounding = rounding + np.abs(term) * _EPS * np.abs(nn) / np.abs(one_minus_n)
             out.update(advance=advance, advance_spread=spread, n_margin=n_margin, n_rounding=rounding)
     return out
@@ -200,26 +264,26 @@ def summarize_batch(parameters: Mapping[str, Any], initial: Mapping[str, Any], n
     S = [s[k] for k in ("theta", "theta_dot", "phi_dot", "psi_dot")]
     with np.errstate(all="ignore"):
         a, b, alpha, beta = _columns(F["state"], (*P, *S), n)
-        c = _columns(F["f"], (a, b, alpha, beta), n)
-        c_other = _columns(F["f_state"], (*P, *S), n)
-        d_pole, d_bottom = _columns(F["gaps"], (*P, *S), n)
+        taylor = _columns(F["taylor"], (*P, *S), n)
+        c, sizes = taylor[:4], taylor[4:]
+        shift = _columns(F["shift_values"], (*P, *S), n)
+        rate0, d_bottom, d_pole = shift
         u0 = np.cos(S[0])
-        r, last_step = _roots(c, u0)
-        # the same roots from the coefficients' second derivation: where f's coefficients lose digits to
-        # cancellation the two evaluations round differently, and every quantity built on the roots shows it
-        r_other, step_other = _roots(c_other, u0)
-        # and from f shifted by its rounding noise near the roots, 4ε Σ|c_k||u|^k (as an error in the energy α
-        # would shift it): f + δ widens the motion, f - δ narrows it, consistently for all three roots
-        absr = np.abs(r)
-        noise = 4 * _EPS * np.max(((np.abs(c[0])[:, None] * absr + np.abs(c[1])[:, None]) * absr
-                                   + np.abs(c[2])[:, None]) * absr + np.abs(c[3])[:, None], axis=1)
-        shifted = [_polish([c[0], c[1], c[2], c[3] + sign * noise], r) for sign in (1.0, -1.0)]
-        du = np.max([np.abs(x - r) for x in (r_other, *shifted)], axis=0) + 2 * (last_step + step_other) \
-            + 2 * _EPS * absr
-        amp = r[:, 1] - r[:, 0]
+        w, last_step = _roots(c, -d_bottom, -d_pole)
+        # f's rounding noise at the roots, from the sizes of its coefficients' terms (8ε each): f shifted up and
+        # down by it widens and narrows the motion consistently; every quantity is recomputed from those roots
+        absw = np.abs(w)
+        noise = 8 * _EPS * (((sizes[0][:, None] * absw + sizes[1][:, None]) * absw + sizes[2][:, None]) * absw
+                            + sizes[3][:, None])
+        slope = np.abs((3 * c[0][:, None] * w + 2 * c[1][:, None]) * w + c[2][:, None])
+        # the turning points' noise moves f up and down: u1, u2 (and u3 with them) consistently
+        near = np.maximum(noise[:, 0], noise[:, 1])
+        moved = [_newton([c[0], c[1], c[2], c[3] + sign * near], w)[0] for sign in (1.0, -1.0)]
+        dw = np.max([np.abs(x - w) for x in moved], axis=0) + noise / slope + 2 * last_step
+        amp = w[:, 1] - w[:, 0]
         want_advance = any(k in names for k in ("mean_precession_rate", "precession_per_nutation"))
-        base = _pipeline(F, P, a, b, beta, r, want_advance)
-        others = [_pipeline(F, P, a, b, beta, x, want_advance) for x in (r_other, *shifted)]
+        base = _pipeline(F, P, a, beta, shift, w, want_advance)
+        others = [_pipeline(F, P, a, beta, shift, x, want_advance) for x in moved]
 
         def propagated(key: str) -> np.ndarray:
             return np.max([np.abs(o[key] - base[key]) for o in others], axis=0)
@@ -229,17 +293,20 @@ def summarize_batch(parameters: Mapping[str, Any], initial: Mapping[str, Any], n
         K_other = elliprf(np.zeros(n), base["m1"], 1.0)
         T = base["T"]
         T_err = propagated("T") + np.abs(K_other - base["K"]) * 2 / base["kappa"] + 4 * _EPS * T
-        # a nutating motion well inside the separatrix and away from the poles' passages
-        fallback |= ~(amp > 1e-6 * np.maximum(np.abs(r[:, 1]), 1.0))  # near-steady: u1, u2 a near double root
+        one_minus_u2, one_plus_u1 = -d_pole - w[:, 1], d_bottom + w[:, 0]
+        # a nutating motion, inside the separatrix, away from the poles' passages
+        fallback |= ~(amp > 1e-9 * np.maximum(absw[:, 2], 1e-300)) | ~(amp > 0)  # steady, or nearly
         fallback |= ~(base["m1"] > 1e-6)
-        fallback |= (d_pole == 0) | (d_bottom == 0) | ~(1 - r[:, 1] > 1e-6) | ~(1 + r[:, 0] > 1e-6)
-        fallback |= ~np.all(np.isfinite(r), axis=1) | ~np.isfinite(T) | ~(du[:, 2] < 1e-6 * r[:, 2])
+        fallback |= ~(one_minus_u2 > 1e-6) | ~(one_plus_u1 > 1e-6)
+        fallback |= ~np.all(np.isfinite(w), axis=1) | ~np.isfinite(T)
+        u = u0[:, None] + w
         theta_err = {k: propagated(k) + 4 * _EPS * base[k] for k in ("theta_min", "theta_max")}
         out: dict[str, tuple[np.ndarray, np.ndarray]] = {
             "nutation_period": (T, T_err), "period": (T, T_err),
             "theta_min": (base["theta_min"], theta_err["theta_min"]),
             "theta_max": (base["theta_max"], theta_err["theta_max"]),
-            "u1": (r[:, 0], du[:, 0]), "u2": (r[:, 1], du[:, 1]), "u3": (r[:, 2], du[:, 2]),
+            "u1": (u[:, 0], dw[:, 0] + _EPS * np.abs(u[:, 0])), "u2": (u[:, 1], dw[:, 1] + _EPS * np.abs(u[:, 1])),
+            "u3": (u[:, 2], dw[:, 2] + _EPS * np.abs(u[:, 2])),
         }
         if want_advance:
             adv = base["advance"]
@@ -265,18 +332,19 @@ def summarize_batch(parameters: Mapping[str, Any], initial: Mapping[str, Any], n
             fallback |= ~(err <= _RTOL * np.abs(value)) | ~np.isfinite(value)
             values[name], errors[name] = value, err
         if "motion_class" in names:
-            u1, u2 = r[:, 0], r[:, 1]
-            g1, g2 = b - a * u1, b - a * u2
+            # figure 44's rule as exact.classify applies it to (u1, u2, a, b); here b − a u_k = φ̇0 sin²θ0 − a w_k
+            # (rate0 − a w_k) without cancellation.  A point within its error of the rule's thresholds (1e-12)
+            # could be classed differently at 40 digits: one by one
+            g = rate0[:, None] - a[:, None] * w[:, :2]
             scale = np.maximum(np.maximum(np.abs(a), np.abs(b)), 1e-300)
-            # figure 44's rule as exact.classify applies it; a point whose u2 - u1 or |b - a u_k| lies within
-            # its error of the rule's thresholds (1e-12) could be classed differently at 40 digits: one by one
-            g_err = np.abs(a)[:, None] * du[:, :2] + 4 * _EPS * scale[:, None]
-            near = np.abs(np.stack([g1, g2], axis=1)) - 1e-12 * scale[:, None]
-            fallback |= np.any(np.abs(near) <= 4 * g_err, axis=1)
-            g_min = np.minimum(np.abs(g1), np.abs(g2))
-            classes = np.where(u2 - u1 <= 1e-12, "uniform precession",
+            g_err = np.abs(a)[:, None] * dw[:, :2] + 8 * _EPS * (np.abs(rate0) + np.abs(a) * absw[:, :2].T).T
+            fallback |= np.any(np.abs(np.abs(g) - 1e-12 * scale[:, None]) <= 4 * g_err + 4 * _EPS * scale[:, None],
+                               axis=1)
+            fallback |= np.abs(amp - 1e-12) <= 4 * (dw[:, 0] + dw[:, 1])
+            g_min = np.min(np.abs(g), axis=1)
+            classes = np.where(amp <= 1e-12, "uniform precession",
                                np.where(g_min <= 1e-12 * scale, "cusps",
-                                        np.where(g1 * g2 > 0, "monotonic precession", "looping"))).astype(object)
-            values["motion_class"] = classes
+                                        np.where(g[:, 0] * g[:, 1] > 0, "monotonic precession", "looping")))
+            values["motion_class"] = classes.astype(object)
             errors["motion_class"] = np.full(n, np.nan)
     return BatchSummary(values, errors, fallback)

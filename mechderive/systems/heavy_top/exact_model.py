@@ -26,6 +26,7 @@ import functools
 import sympy as sp
 
 from ...core.model import SymbolicModel, derived
+from ...core.simplify import trig_normal
 from ...errors import DerivationError
 from . import model as heavy_model
 
@@ -103,6 +104,88 @@ class HeavyTopExactModel(SymbolicModel):
         if not _is_zero_rational(sp.together(rebuilt - along)):
             raise DerivationError("partial fractions do not reproduce the rate")
         return {"c0": sp.factor(c0), "terms": terms}
+
+    @derived
+    def f_taylor_state(self) -> tuple[sp.Expr, ...]:
+        """The coefficients of w³, w², w, 1 in f(u0 + w) (3.73), u0 = cos θ0, in the parameters and the state.
+
+        Measured from the start, the turning points are u_k = u0 + w_k with w1 ≤ 0 ≤ w2: the amplitude
+        w2 − w1 and the distances from u0 keep their relative accuracy in double precision, where the
+        roots of f in u lose it to cancellation when the amplitude is small (a fast top: u2 − u1 ~ 1e-4
+        leaves 1e-12 of it).  The constant term is f(u0) = sin²θ0 θ̇0² (the energy at the start).
+        """
+        hm = heavy_model
+        w = sp.Symbol("w", real=True)
+        shifted = sp.Poly(sp.expand(hm.model().f_u.subs(hm.u, sp.cos(hm.theta) + w)), w)
+        cfs = hm.model().constants_from_state
+        coeffs = tuple(sp.factor(trig_normal(c.subs(cfs))) for c in shifted.all_coeffs())
+        if len(coeffs) != 4:
+            raise DerivationError(f"expected a cubic f(u0 + w), got coefficients {coeffs}")
+        return coeffs
+
+    @derived
+    def precession_fractions_shifted(self) -> dict:
+        """φ̇ (3.74) along u = u0 + w1 + (w2 − w1) sn² as c0 + Σ c_i / (1 − n_i sn²), in the shifted symbols.
+
+        Each linear factor (u − r) of φ̇'s denominator is written (u0 − r) + w with u0 − r a symbol
+        (``d_pole`` for r = 1, ``d_bottom`` for r = −1: −2 sin²(θ0/2) and 2 cos²(θ0/2), exact at the
+        poles), and the numerator's constant term in w, its value at u0, a symbol ``rate0`` (φ̇0 times
+        the denominator at u0, from the state).  Returns {"c0", "terms": [(c_i, n_i)], "args": symbols,
+        "values": {symbol: its expression in the state}}; checked to reproduce φ̇ identically.
+        """
+        hm = heavy_model
+        rate = hm.model().precession_rate_u
+        num, den = sp.fraction(sp.together(rate))
+        w, x = sp.symbols("w x_shift", real=True)
+        w1, amp, rate0 = sp.symbols("w1 amp rate0", real=True)
+        gaps = {}
+        factored_den = sp.Integer(1)
+        const, factors = sp.factor_list(den, hm.u)
+        for fac, mult in factors:
+            poly = sp.Poly(fac, hm.u)
+            if poly.degree() != 1:
+                raise DerivationError(f"expected linear factors of φ̇'s denominator in u, got {fac}")
+            lead, tail = poly.all_coeffs()
+            r = -tail / lead
+            if r not in (1, -1):
+                raise DerivationError(f"expected φ̇'s poles at u = ±1, got u = {r}")
+            d = sp.Symbol("d_pole" if r == 1 else "d_bottom", real=True)
+            gaps[d] = r
+            factored_den *= (lead * (d + w)) ** mult
+        num_w = sp.Poly(sp.expand(num.subs(hm.u, hm.u0 + w)), w)
+        coeffs = num_w.all_coeffs()
+        num_shift = sum(c * w ** k for k, c in enumerate(reversed(coeffs[:-1]), start=1)) + rate0
+        along = sp.together((num_shift / (const * factored_den)).subs(w, w1 + amp * x))
+        parts = sp.apart(along, x, full=False)
+        c0, terms = sp.Integer(0), []
+        for term in sp.Add.make_args(sp.expand(parts)):
+            n_, d_ = sp.fraction(sp.factor(term))
+            if not d_.has(x):
+                c0 += term
+                continue
+            p1, p0 = sp.Poly(d_, x).all_coeffs()
+            c, n = n_ / p0, sp.factor(-p1 / p0)
+            for k, (c_old, n_old) in enumerate(terms):
+                if _is_zero_rational(n - n_old):  # the same pole: one term
+                    terms[k] = (c_old + c, n_old)
+                    break
+            else:
+                terms.append((c, n))
+        terms = [(sp.factor(c), n) for c, n in terms]
+        rebuilt = c0 + sum(c / (1 - n * x) for c, n in terms)
+        if not _is_zero_rational(sp.together(rebuilt - along)):
+            raise DerivationError("the shifted partial fractions do not reproduce φ̇")
+        th = hm.theta
+        cfs = hm.model().constants_from_state
+        values = {rate0: sp.factor(trig_normal(coeffs[-1].subs(hm.u0, sp.cos(th)).subs(cfs)))}
+        for d, r in gaps.items():
+            # cos θ0 − r in the half angle: −2 sin²(θ0/2) or 2 cos²(θ0/2), no cancellation at the poles
+            half = -2 * sp.sin(th / 2) ** 2 if r == 1 else 2 * sp.cos(th / 2) ** 2
+            if sp.simplify(sp.expand_trig(half.subs(th, 2 * sp.Symbol("h")) - (sp.cos(2 * sp.Symbol("h")) - r))) != 0:
+                raise DerivationError(f"expected cos θ − {r} = {half}")
+            values[d] = half
+        args = [hm.I1, hm.I3, hm.a, rate0, *sorted(gaps, key=str), w1, amp]
+        return {"c0": sp.factor(c0), "terms": terms, "args": args, "values": values}
 
     @derived
     def precession_fractions(self) -> dict:
