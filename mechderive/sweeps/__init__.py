@@ -1,0 +1,1 @@
+"""Parameter sweeps: a scene's quantities over a grid or a random sample of its parameters."""
