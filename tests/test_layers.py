@@ -11,7 +11,7 @@ The layers, bottom first (a module may import its own layer and those below, nev
 3. ``solvers`` (integrators; the generated C comes from ``core.codegen``);
 4. ``systems`` (each system, its registry and protocol);
 5. the generic layers that ask the registry: ``scenes``, ``derive``, ``formulas``, ``catalog``,
-   ``interop``, ``bench``, ``stress``;
+   ``interop``, ``bench``, ``stress``, ``sweeps``;
 6. ``cli``; 7. ``__main__`` (and the package's lazily loaded public names).
 
 Issue 13 gives the same order except that it puts ``kinematics`` and ``inertia`` below ``core``
@@ -53,6 +53,7 @@ LAYERS: dict[str, int] = {
     "mechderive.interop": 5,
     "mechderive.bench": 5,
     "mechderive.stress": 5,
+    "mechderive.sweeps": 5,
     "mechderive.cli": 6,
     "mechderive.__main__": 7,
     "mechderive": 7,
