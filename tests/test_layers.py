@@ -53,7 +53,6 @@ LAYERS: dict[str, int] = {
     "mechderive.interop": 5,
     "mechderive.bench": 5,
     "mechderive.stress": 5,
-    "mechderive.sweeps": 5,
     "mechderive.cli": 6,
     "mechderive.__main__": 7,
     "mechderive": 7,
