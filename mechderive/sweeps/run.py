@@ -157,7 +157,7 @@ def run_sweep(sweep: Sweep, output: os.PathLike | str, *, workers: int | None = 
     parts = Parts(output.with_name(output.name + ".parts"), sweep.fingerprint, sweep.chunks, sweep.points)
     done = parts.start(resume=resume)
     todo = [k for k in range(sweep.chunks) if k not in set(done)]
-    source = json.dumps(sweep.source, sort_keys=True)
+    source = json.dumps(sweep.source)  # key order kept: the axes are in the order the file gives them
     start = time.perf_counter()
     counted = {"points": sum(len(sweep.chunk_rows(k)) for k in done), "seconds": 0.0}
 
