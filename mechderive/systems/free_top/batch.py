@@ -176,8 +176,8 @@ def _stability(I: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     unit = np.where(spin == 0, 1.0, spin)
     growth = _compiled("growth_squared")
     other = _compiled("axis_growth_rate_squared")
-    second = np.stack(np.broadcast_arrays(*(np.asarray(x, dtype=float) * np.ones(n) for x in
-                                            np.ravel(other(I[:, 0], I[:, 1], I[:, 2], unit)))))
+    # the compiled vector function returns (N, 3) on arrays: one row per point
+    second = np.broadcast_to(np.asarray(other(I[:, 0], I[:, 1], I[:, 2], unit), dtype=float), (n, 3)).T
     kinds, rates, errs = [], [], np.zeros(n)
     for a in range(3):
         W = [np.zeros(n), np.zeros(n), np.zeros(n)]
