@@ -11,14 +11,16 @@ numbers reproduced operation for operation):
   1 - m = G_y (I_x - I_z)/(G_x (I_y - I_z));
 * ``energy`` T (3.46) and ``angular_momentum`` |L| (3.47) at t = 0;
 * ``stability`` per principal axis (3.44)-(3.45), from the same derived s(ω) the single path evaluates
-  (:func:`.stability.linearised_eigenvalues`), evaluated on arrays.
+  (:func:`.stability.linearised_eigenvalues`), evaluated on arrays;
+* ``precession_rate`` of a symmetric top: Ω of (3.36) (the same derived expression) and φ̇ = |L|/I⊥ (3.60).
 
 The single path (:func:`.summary.summarize`) computes the period from 40-digit constants, so it is the
 correctly rounded 4K/λ.  Here each point carries a rounding *bound* of its own double evaluation, from
 the condition numbers computed for that point (below); a point whose bound exceeds :data:`BOUND` — so that
 it could differ from the single path by more than 1e-12 relative — is marked ``fallback``, as are points the
-single path refuses or answers otherwise (a steady rotation, the separatrix, a symmetric top's flip, a
-``precession_rate``, a scene the planner would solve in units of its own motion for a table of numbers).
+single path refuses or answers otherwise (a steady rotation, the separatrix, a symmetric top's flip, the
+precession rate of a body that is not a symmetric top, a scene the planner would solve in units of its own
+motion for a table of numbers).
 """
 
 from __future__ import annotations
@@ -204,6 +206,45 @@ def _stability(I: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return table, errs
 
 
+def _precession(I: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The symmetric top's {"axis", "body", "space"} of :func:`.summary._precession`, as an object array, its
+    estimate, and where it applies (exactly two equal moments).
+
+    ``body``: Ω of (3.35)-(3.36), the derived expression the single path compiles, evaluated on arrays
+    (elementwise: the same operations).  ``space``: φ̇ = |L|/I⊥ (3.60).  The single path takes it from the
+    closed form's precession per polhode period over the period — for a symmetric top m = 0 and the
+    characteristic n = 0, so φ̇ = c1 + c2 is constant and equals |L|/I⊥ exactly; its two roundings (the
+    advance and the period, each correctly rounded from 40 digits) and the quotient's put it within 3u of
+    |L|/I⊥, and |L|/I⊥ here is within 3u (the sum of squares, the root, the quotient) — 6u in all, far
+    below 1e-12.  For a steady rotation the single path uses |L|/I⊥ itself.  The estimate is measured: the
+    difference of |L| by the root of the sum of squares and by nested hypot, plus the rounding of Ω's terms
+    as the single path bounds it.
+    """
+    from .summary import symmetric_rate_function
+
+    n = len(I)
+    e01, e12, e02 = I[:, 0] == I[:, 1], I[:, 1] == I[:, 2], I[:, 0] == I[:, 2]
+    symmetric = (e01.astype(int) + e12 + e02) == 1
+    axis = np.where(e01, 2, np.where(e12, 0, 1))  # the distinct (symmetry) axis
+    perp = np.where(e01 | e02, I[:, 0], I[:, 1])
+    Ia, wa = _take(I, axis), _take(w, axis)
+    body = np.ravel(np.asarray(symmetric_rate_function()(perp, Ia, wa), dtype=float)) * np.ones(n)
+    Lv = I * w
+    with np.errstate(all="ignore"):
+        L = np.sqrt(Lv[:, 0] * Lv[:, 0] + Lv[:, 1] * Lv[:, 1] + Lv[:, 2] * Lv[:, 2])
+        L2 = np.hypot(np.hypot(Lv[:, 0], Lv[:, 1]), Lv[:, 2])
+        space = L / perp
+        spread = np.abs(L - L2) / perp + 4 * _EPS * space
+        err = np.maximum(4 * _EPS * np.abs(wa) * (perp + Ia) / perp + 2 * _EPS * np.abs(body),
+                         spread + 2 * _EPS * np.abs(space))
+    table = np.empty(n, dtype=object)
+    for i in np.flatnonzero(symmetric):  # building the dicts (the output's form), not computing
+        table[i] = {"axis": int(axis[i]) + 1, "body": float(body[i]), "space": float(space[i])}
+    fine = symmetric & np.isfinite(body) & np.isfinite(space) & (space > 0) \
+        & ~np.any((Lv != 0) & (np.abs(Lv) < _TINY), axis=1)
+    return table, np.where(symmetric, err, np.nan), fine
+
+
 def summarize_batch(parameters: Mapping[str, np.ndarray], initial: Mapping[str, np.ndarray],
                     names: tuple[str, ...], *, strict: bool = True) -> BatchSummary:
     """The per-motion quantities ``names`` of N free tops (module docstring), SI units.
@@ -273,10 +314,11 @@ def summarize_batch(parameters: Mapping[str, np.ndarray], initial: Mapping[str, 
         # the single path evaluates it only for a rigid body's moments (triangle inequalities) and as given
         fallback |= _refused(Ic, wc, True) | ~_comfortable(Ic, wc)
     if "precession_rate" in wanted:
-        # a table from the closed form's φ̇ at 40 digits, defined for symmetric tops only: not batched
-        values["precession_rate"] = np.full(n, None, dtype=object)
-        errors["precession_rate"] = np.full(n, np.nan)
-        fallback[:] = True
+        table, err, symmetric = _precession(Ic, wc)
+        values["precession_rate"], errors["precession_rate"] = table, err
+        # defined for a symmetric top only (distinct moments or a sphere: None with a reason); a table of rates
+        # is None from the planner for a scene solved in units of its own motion
+        fallback |= ~symmetric | ~_comfortable(Ic, wc)
     for name in names:
         if name not in values:  # an unknown name: the planner's own message, point by point
             values[name], errors[name] = np.full(n, np.nan), np.full(n, np.nan)
