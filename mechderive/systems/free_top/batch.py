@@ -47,7 +47,6 @@ _COMFORTABLE = 64
 #: Scaled magnitudes below this (2^-900) are kept away from the subnormal range: every product of the
 #: setup then rounds with a relative error of one unit, which the bounds below assume.
 _TINY = 2.0**-900
-_NAMES = ("polhode_period", "period", "flip_interval", "precession_rate", "stability", "energy", "angular_momentum")
 
 
 def _refused(I: np.ndarray, w: np.ndarray, strict: bool) -> np.ndarray:
