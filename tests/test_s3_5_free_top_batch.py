@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from mechderive.errors import InvalidInputError
 from mechderive.scenes.planner import run_scene
 from mechderive.scenes.schema import parse_scene
 from mechderive.systems.free_top.system import FreeTop
@@ -162,6 +163,11 @@ def test_refused_separatrix_steady_and_inapplicable_points_fall_back():
     assert _batch(np.array([[2.0, 2.0, 2.0]]), sym[1], ("precession_rate",)).fallback[0]
     assert _batch(I[3:4], w[3:4], ("precession_rate",)).fallback[0]
     assert _batch(I[3:4], w[3:4], ("no_such_quantity",)).fallback[0]
+    # a non-finite Euler angle is refused by the scene: fallback; arrays of different lengths are refused here
+    angles = {"omega": w[3:4], "phi": np.array([np.inf])}
+    assert TOP.summarize_batch({"I1": I[3:4, 0], "I2": I[3:4, 1], "I3": I[3:4, 2]}, angles, PLAIN).fallback[0]
+    with pytest.raises(InvalidInputError):
+        TOP.summarize_batch({"I1": I[:, 0], "I2": I[:, 1], "I3": I[:, 2]}, {"omega": w[:2]}, PLAIN)
 
 
 def test_chunks_do_not_change_results():

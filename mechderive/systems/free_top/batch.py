@@ -30,6 +30,7 @@ from typing import Any, Mapping
 import numpy as np
 from scipy import special
 
+from ...errors import InvalidInputError
 from ..base import BatchSummary
 
 __all__ = ["summarize_batch", "BOUND"]
@@ -144,7 +145,7 @@ def _period(Is: np.ndarray, ws: np.ndarray) -> dict[str, np.ndarray]:
         P = 4 * K / lam
     # not answered here: non-finite steps, subnormal-range values (the bounds assume single roundings),
     # the sign of G_y not certain (then even the relabelling may differ), or a bound above BOUND
-    mags = np.concatenate([a, np.stack([d_ml, d_hl, d_hm, np.abs(Gx), np.abs(Gz), np.abs(Gy), lam2, mm, mm1], 1)],
+    mags = np.concatenate([Is, a, np.stack([d_ml, d_hl, d_hm, np.abs(Gx), np.abs(Gz), np.abs(Gy), lam2, mm, mm1], 1)],
                           axis=1)
     tiny = np.any((mags != 0) & (mags < _TINY), axis=1)
     unsure = ~(5 * kappa * u < 0.5)  # includes G_y = 0 (κ = inf) and nan
@@ -252,10 +253,17 @@ def summarize_batch(parameters: Mapping[str, np.ndarray], initial: Mapping[str, 
     given, do not enter these quantities).  Every point is computed elementwise, so a chunk's results do not
     depend on what else is in the chunk.
     """
-    I = np.stack([np.asarray(parameters[k], dtype=float).reshape(-1) for k in ("I1", "I2", "I3")], axis=1)
-    w = np.asarray(initial["omega"], dtype=float).reshape(-1, 3)
-    n = len(I)
+    moments = [np.asarray(parameters[k], dtype=float).reshape(-1) for k in ("I1", "I2", "I3")]
+    n = len(moments[0])
+    w = np.asarray(initial["omega"], dtype=float)
+    if any(len(x) != n for x in moments) or w.shape != (n, 3):
+        raise InvalidInputError(f"expected I1, I2, I3 of N values and omega of shape (N, 3), got lengths "
+                                f"{[len(x) for x in moments]} and omega of shape {w.shape}")
+    I = np.stack(moments, axis=1)
     refused = _refused(I, w, strict)
+    for key in ("phi", "theta", "psi"):  # the Euler angles enter none of these, but the scene refuses them non-finite
+        if key in initial:
+            refused |= ~np.isfinite(np.asarray(initial[key], dtype=float).reshape(-1) * np.ones(n))
     Ic = np.where(refused[:, None], 1.0, I)
     wc = np.where(refused[:, None], 0.0, w)
     # exact powers of two: max moment and max |ω| in [1/2, 1), so the setup is far from overflow and underflow
