@@ -31,6 +31,7 @@ import numpy as np
 from scipy import special
 
 from ...errors import InvalidInputError
+from .. import scaling as _scaling
 from ..base import BatchSummary
 
 __all__ = ["summarize_batch", "BOUND"]
@@ -41,10 +42,10 @@ _EPS = float(np.finfo(float).eps)
 #: 1e-13 leaves a factor of ten for what the bound assumes (SciPy's ellipk/ellipkm1 within a few ulp, which
 #: the measured Carlson comparison checks point by point: it enters the decision too).
 BOUND = 1e-13
-#: Exponents within 2^±64 of one: the planner solves the scene as given (``systems.scaling._COMFORTABLE``);
-#: beyond, a table of rates (``stability``) or a quantity without a power of two (``angular_momentum``)
-#: comes back None from the single path, so such points fall back.
-_COMFORTABLE = 64
+#: Exponents within 2^±64 of one: the planner solves the scene as given; beyond, a table of rates
+#: (``stability``) or a quantity without a power of two (``angular_momentum``) comes back None from the
+#: single path, so such points fall back.  The planner's own constant, so the two cannot drift apart.
+_COMFORTABLE = _scaling._COMFORTABLE
 #: Scaled magnitudes below this (2^-900) are kept away from the subnormal range: every product of the
 #: setup then rounds with a relative error of one unit, which the bounds below assume.
 _TINY = 2.0**-900
