@@ -64,18 +64,22 @@ def _omega_dot(moments: np.ndarray, w: np.ndarray) -> np.ndarray:
     return np.asarray(_compiled("free_rhs")(*w, *moments), dtype=float).reshape(3)
 
 
-def _symmetric_rate(perp: float, axial: float, spin: float) -> float:
-    """Ω of (3.35)-(3.36) as derived from the symmetric top's equations
+def symmetric_rate_function() -> Any:
+    """Ω(I⊥, I_a, ω_a) of (3.35)-(3.36) as derived from the symmetric top's equations
     (:attr:`.model.FreeTopModel.symmetric_precession_rate`, symmetry axis 3; another symmetry axis is the same
-    equations with the axes relabelled cyclically)."""
+    equations with the axes relabelled cyclically), compiled for NumPy (elementwise on arrays too)."""
     from ...core import codecache
     from . import model as fm
 
     def build():
         return [fm.I1, fm.I3, fm.omega_symbols()[2]], fm.model().symmetric_precession_rate
 
-    value = codecache.cached_lambdify("free_top.symmetric_precession_rate", build, module="numpy")[0](
-        perp, axial, spin)
+    return codecache.cached_lambdify("free_top.symmetric_precession_rate", build, module="numpy")[0]
+
+
+def _symmetric_rate(perp: float, axial: float, spin: float) -> float:
+    """Ω of (3.35)-(3.36) for one symmetric top (:func:`symmetric_rate_function`)."""
+    value = symmetric_rate_function()(perp, axial, spin)
     return float(np.ravel(np.asarray(value, dtype=float))[0])
 
 

@@ -27,6 +27,7 @@ from .summary import SUMMARIES
 from ..scene_keys import SCENE_STRICT_HINT, at, check_keys, number, number_list, rename_keys
 
 if TYPE_CHECKING:  # pragma: no cover
+    from ..base import BatchSummary
     from ...core.drift import Drift
     from ...scenes.schema import Scene
     from ..scaling import Scaled
@@ -395,6 +396,13 @@ class FreeTop(System):
         from .summary import summarize
 
         return summarize(scene, solved, t, names)
+
+    def summarize_batch(self, parameters: Mapping[str, np.ndarray], initial: Mapping[str, np.ndarray],
+                        names: tuple[str, ...], *, strict: bool = True) -> BatchSummary:
+        """N motions at once, vectorised in NumPy/SciPy (:mod:`.batch`); ill-conditioned points fall back."""
+        from .batch import summarize_batch
+
+        return summarize_batch(parameters, initial, names, strict=strict)
 
     def period(self, scene: "Scene") -> float | None:
         """The polhode period (s), for ``[time] samples_per_period``; None for a steady or separatrix motion."""
