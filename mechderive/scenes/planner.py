@@ -301,9 +301,13 @@ def summarize(scene: Scene, scaled: Scaled, solved: Solved, t: np.ndarray) -> tu
                 value, error = None, (f"not available for a scene solved in units of its own motion "
                                       f"({_units_note(scaled)}): {name} is not a number scaled by a power of two")
             else:
-                value = math.ldexp(float(value), e)
-                if isinstance(error, (int, float)):
-                    error = math.ldexp(float(error), e)
+                try:
+                    value = math.ldexp(float(value), e)
+                    if isinstance(error, (int, float)):
+                        error = math.ldexp(float(error), e)
+                except OverflowError:  # beyond the largest double in the scene's units
+                    value, error = None, (f"{name} in the scene's units is beyond the largest double "
+                                          f"({float(value):.6g} × 2^{e})")
         values[name], errors[name] = value, error
     return values, errors
 
