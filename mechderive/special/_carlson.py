@@ -16,6 +16,11 @@ ulp.  R_J with p < 0 is the Cauchy principal value, by Carlson's transformation
 (DLMF 19.20.14).  Written here rather than taken from ``scipy.special`` because
 importing SciPy's module costs ~0.4 s — more than a whole warm ``mechderive run``.
 
+Precision: the arguments' own.  Doubles by default; with any argument a ``numpy.longdouble`` array
+(x87 extended precision on x86-64: 64-bit significand, ε = 1.1e-19) every step runs in it, with the
+stopping rule's r set to its half-ulp — the extended tier of the batched closed forms
+(:mod:`mechderive.systems.heavy_top.batch`) takes its integrals from here.
+
 Domain: x, y, z ≥ 0 with at most one zero; p ≠ 0; y > 0 for R_C.  The callers in
 this package guarantee it; outside it the results are NaN or inf, not errors.
 """
@@ -26,22 +31,30 @@ import numpy as np
 
 __all__ = ["elliprc", "elliprd", "elliprf", "elliprj"]
 
-_R = 2.0**-53
-_QF = (3 * _R) ** (-1 / 6)
-_QJ = (_R / 4) ** (-1 / 6)
-_QC = (3 * _R) ** (-1 / 8)
 _MAX_STEPS = 64  # each step quarters Q / |A|: 64 steps reach 4⁻⁶⁴ ≈ 3e-39
 
 
+def _dtype(*args) -> type:
+    """longdouble if any argument is, else float64."""
+    return np.longdouble if any(np.asarray(a).dtype == np.longdouble for a in args) else np.float64
+
+
+def _q(dtype: type) -> tuple[float, float, float]:
+    """Carlson's (Q_F, Q_J, Q_C) factors for the rounding unit r of ``dtype``."""
+    r = float(np.finfo(dtype).eps) / 2
+    return (3 * r) ** (-1 / 6), (r / 4) ** (-1 / 6), (3 * r) ** (-1 / 8)
+
+
 def _as_float(*args):
-    return np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in args))
+    dtype = _dtype(*args)
+    return np.broadcast_arrays(*(np.asarray(a, dtype=dtype) for a in args))
 
 
 def elliprf(x, y, z):
     """R_F(x, y, z) (DLMF 19.16.1) by duplication (Carlson 1995, algorithm 1)."""
     x, y, z = (a.copy() for a in _as_float(x, y, z))
-    A0 = (x + y + z) / 3.0
-    Q = _QF * np.maximum(np.abs(A0 - x), np.maximum(np.abs(A0 - y), np.abs(A0 - z)))
+    A0 = (x + y + z) / 3
+    Q = _q(x.dtype.type)[0] * np.maximum(np.abs(A0 - x), np.maximum(np.abs(A0 - y), np.abs(A0 - z)))
     x0, y0 = x.copy(), y.copy()
     A = A0.copy()
     scale = np.ones_like(A)  # 4⁻ⁿ
@@ -64,8 +77,8 @@ def elliprf(x, y, z):
 def elliprc(x, y):
     """R_C(x, y) (DLMF 19.2.17), y > 0, by duplication (Carlson 1995, algorithm 2)."""
     x, y = (a.copy() for a in _as_float(x, y))
-    A0 = (x + 2 * y) / 3.0
-    Q = _QC * np.abs(A0 - x)
+    A0 = (x + 2 * y) / 3
+    Q = _q(x.dtype.type)[2] * np.abs(A0 - x)
     y0 = y.copy()
     A = A0.copy()
     scale = np.ones_like(A)
@@ -88,7 +101,9 @@ def _rc_one(e):
     (1e-3⁷/15 < 1e-22) avoids the 0/0; the closed forms elsewhere are accurate to a few ulp.
     Only the branches some point needs are evaluated (this is R_J's inner loop).
     """
-    e = np.asarray(e, dtype=float)
+    e = np.asarray(e)
+    if e.dtype != np.longdouble:
+        e = e.astype(float)
     series = 1 - e * (1 / 3 - e * (1 / 5 - e * (1 / 7 - e * (1 / 9 - e * (1 / 11 - e / 13)))))
     small = np.abs(e) < 1e-3
     if np.all(small):
@@ -111,11 +126,12 @@ def _rj_positive(x, y, z, p):
     x, y, z are not broadcast against p: several p (an array of characteristics) for one
     (x, y, z) share the duplication of x, y, z.
     """
-    x, y, z, p = (np.asarray(a, dtype=float) for a in (x, y, z, p))
+    dtype = _dtype(x, y, z, p)
+    x, y, z, p = (np.asarray(a, dtype=dtype) for a in (x, y, z, p))
     shape = np.broadcast(x, y, z, p).shape
-    A0 = (x + y + z + 2 * p) / 5.0
+    A0 = (x + y + z + 2 * p) / 5
     delta = (p - x) * (p - y) * (p - z)
-    Q = _QJ * np.maximum(np.maximum(np.abs(A0 - x), np.abs(A0 - y)), np.maximum(np.abs(A0 - z), np.abs(A0 - p)))
+    Q = _q(dtype)[1] * np.maximum(np.maximum(np.abs(A0 - x), np.abs(A0 - y)), np.maximum(np.abs(A0 - z), np.abs(A0 - p)))
     x0, y0, z0 = x, y, z
     A = A0
     scale = 1.0  # 4⁻ᵐ
@@ -152,7 +168,7 @@ def elliprj(x, y, z, p):
         return _rj_positive(x, y, z, p)
     x, y, z, p = _as_float(x, y, z, p)
     neg = p < 0
-    out = np.empty(p.shape)
+    out = np.empty(p.shape, dtype=p.dtype)
     pos = ~neg
     if np.any(pos):
         out[pos] = _rj_positive(x[pos], y[pos], z[pos], p[pos])
