@@ -33,7 +33,7 @@ from .report import check_targets, format_report, plot_work_precision
 
 __all__ = ["run_benchmarks", "format_report", "plot_work_precision", "check_targets", "SECTIONS"]
 
-SECTIONS = ("heavy_top", "free_top", "ensemble", "cold_start", "laziness", "rigid_body", "interactive")
+SECTIONS = ("heavy_top", "free_top", "ensemble", "cold_start", "laziness", "rigid_body", "interactive", "sweep")
 
 
 def _versions() -> dict:
@@ -59,13 +59,13 @@ def run_benchmarks(*, quick: bool = False, sections: tuple[str, ...] | None = No
                    log: Callable[[str], None] | None = None) -> dict:
     """Run the benchmark ``sections`` and return every figure as plain data (JSON-ready), with the targets.
 
-    ``sections`` defaults to all of :data:`SECTIONS`, except ``laziness``, ``rigid_body`` and ``interactive``
+    ``sections`` defaults to all of :data:`SECTIONS`, except ``laziness``, ``rigid_body``, ``interactive`` and ``sweep``
     (a minute of fresh processes) when ``quick``
     (the first needs a cold derivation of every heavy-top quantity, ~5-10 s, the second the baseline's
     derivation with ``sympy.physics.mechanics``, ~3 s; name them to have them anyway).
     """
     if sections is None:
-        sections = tuple(s for s in SECTIONS if not (quick and s in ("laziness", "rigid_body", "interactive")))
+        sections = tuple(s for s in SECTIONS if not (quick and s in ("laziness", "rigid_body", "interactive", "sweep")))
     unknown = [s for s in sections if s not in SECTIONS]
     if unknown:
         raise InvalidInputError(f"expected sections among {', '.join(SECTIONS)}, got {unknown[0]!r}")
@@ -113,6 +113,12 @@ def run_benchmarks(*, quick: bool = False, sections: tuple[str, ...] | None = No
         say("interactive: derive, check, run, verify in fresh processes, cold and warm, vs the usual path ...")
         result["interactive"] = interactive(quick=quick)
         lap("interactive")
+    if "sweep" in sections:
+        from .sweep import sweep_throughput
+
+        say("sweep: points per second, local pool and Dask, 1 and 2 workers ...")
+        result["sweep"] = sweep_throughput(quick=quick)
+        lap("sweep")
     if "cold_start" in sections or "laziness" in sections:
         from .startup import cold_start, laziness
 

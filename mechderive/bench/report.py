@@ -75,6 +75,18 @@ def check_targets(result: dict) -> list[dict]:
         out.append(dict(target="a rigid_body scene (asymmetric heavy top, whole user path) ≥ 50× faster than "
                                "sympy.physics.mechanics → lambdify → solve_ivp at equal error", met=met,
                         figures="; ".join(lines)))
+    sweep = result.get("sweep")
+    if sweep:
+        two = [r for r in sweep["rows"] if r.get("sweep") == "heavy top (batched)" and "2 workers" in r.get("backend", "")]
+        if two:
+            r = two[0]
+            out.append(dict(target="heavy-top sweep: 10⁶ points in ≤ 60 s with 2 local workers (≥ 16,667 points/s)",
+                            met=bool(r["points_per_second"] >= 1e6 / 60),
+                            figures=f"{r['points_per_second']:,} points/s on {r['points']:,} points "
+                                    f"({1e6 / r['points_per_second']:.0f} s for 10⁶), {r['one_by_one']} one by one"))
+        same = [r["identical"] for r in sweep["rows"] if r.get("identical") is not None]
+        out.append(dict(target="the same table, bit for bit, from every backend and worker count",
+                        met=bool(same) and all(same), figures=f"{sum(same)} of {len(same)} backends identical"))
     cold = result.get("cold_start")
     if cold:
         w = cold["warm"]
@@ -188,8 +200,12 @@ def format_report(result: dict) -> str:
         from .interactive import report_lines as interactive_lines
 
         L += interactive_lines(result["interactive"])
+    if result.get("sweep"):
+        from .sweep import report_lines as sweep_lines
+
+        L += sweep_lines(result["sweep"])
     skipped = [s for s in ("heavy_top", "free_top", "ensemble", "cold_start", "laziness", "rigid_body",
-                           "interactive") if s not in result]
+                           "interactive", "sweep") if s not in result]
     if skipped:
         L += [f"Not run: {', '.join(skipped)} (see --only; --quick leaves out laziness).", ""]
     targets = result.get("targets", [])

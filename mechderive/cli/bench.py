@@ -23,7 +23,7 @@ def add_parser(sub: "argparse._SubParsersAction") -> None:
     p.add_argument("--json", action="store_true", help="print every figure as JSON instead of the tables")
     p.add_argument("--only", metavar="SECTIONS",
                    help="comma-separated subset of heavy_top,free_top,ensemble,cold_start,laziness,rigid_body,"
-                        "interactive")
+                        "interactive,sweep")
     p.set_defaults(run=run)
 
 

@@ -87,8 +87,9 @@ def evaluate_chunk(sweep: Sweep, k: int) -> dict[str, np.ndarray]:
                 vals = np.asarray(batch.values[name])
                 if vals.dtype.kind in "fiu":
                     columns[name] = np.where(fallback, math.nan, vals.astype(float))
-                else:
-                    columns[name] = np.where(fallback, "", vals).astype(object)
+                else:  # a class as is, a table of values (a dict) as JSON, as the one-by-one points write them
+                    columns[name] = np.array(["" if f else (v if isinstance(v, str) else _text(v))
+                                              for f, v in zip(fallback, vals)], dtype=object)
                 errors[name] = np.where(fallback, math.nan, np.asarray(batch.errors[name], dtype=float))
             path[~fallback] = "batch"
             todo = np.flatnonzero(fallback)
