@@ -1,6 +1,6 @@
 """The scene layer asks the registry of systems and names none (issue 13, part 1).
 
-* The code of ``mechderive/scenes/*.py``, ``cli/run.py`` and ``cli/__init__.py`` (docstrings aside)
+* The code of ``mechderive/scenes/*.py``, ``mechderive/sweeps/*.py``, ``cli/run.py``, ``cli/sweep.py`` and ``cli/__init__.py`` (docstrings aside)
   holds no built-in system's name: the systems are data of the registry.
 * The registry lists the built-in systems; ``mechderive scenes --systems`` and
   ``mechderive scenes --quantities SYSTEM`` print what it says (name, unit, meaning).
@@ -27,7 +27,8 @@ from mechderive.systems.base import Key, Quantity, Solved, System
 from .conftest import run_python
 
 PACKAGE = Path(__file__).resolve().parents[1] / "mechderive"
-SCANNED = sorted((PACKAGE / "scenes").glob("*.py")) + [PACKAGE / "cli" / "run.py", PACKAGE / "cli" / "__init__.py"]
+SCANNED = sorted((PACKAGE / "scenes").glob("*.py")) + sorted((PACKAGE / "sweeps").glob("*.py")) + [
+    PACKAGE / "cli" / "run.py", PACKAGE / "cli" / "sweep.py", PACKAGE / "cli" / "__init__.py"]
 BUILT_IN = ("free_top", "heavy_top", "falling_cat")
 FORBIDDEN = (*BUILT_IN, "deformable")
 
