@@ -268,3 +268,12 @@ def test_importing_the_scene_modules_imports_no_matplotlib():
                             "print('matplotlib' in sys.modules)")
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.strip() == "False"
+
+
+def test_progress_with_a_rate_unit_shows_the_rate_and_the_time_left():
+    now = [0.0]
+    stream = FakeTTY()
+    with Progress(1000, label="sweep", stream=stream, min_seconds=0, clock=lambda: now[0], rate_unit="points") as bar:
+        now[0] = 2.0
+        bar.update(250)  # 125 points/s; 750 left take 6 s at that rate
+        assert stream.getvalue().endswith("25% (250/1000) 2.0 s, 125 points/s, 6 s left")

@@ -45,7 +45,7 @@ def run(args: argparse.Namespace) -> int:
 
         raise InvalidInputError(f"sweep --plot-quantity: expected one of the sweep's summary "
                                 f"({', '.join(sweep.summary)}), got {args.plot_quantity!r}")
-    with Progress(sweep.points, label=f"sweep {sweep.name or Path(args.sweep).stem}") as bar:
+    with Progress(sweep.points, label=f"sweep {sweep.name or Path(args.sweep).stem}", rate_unit="points") as bar:
         result = run_sweep(sweep, output, workers=args.workers, dask=args.dask, resume=args.resume,
                            progress=lambda done, total: bar.update(done - bar.done))
     if args.plot:

@@ -37,12 +37,14 @@ def _is_tty(stream: TextIO) -> bool:
 class Progress:
     """Report progress of ``total`` units of work; a context manager with :meth:`update`.
 
+    With ``rate_unit`` (e.g. "points") the line ends with the rate so far and the time left at that rate.
+
     ``stream`` defaults to ``sys.stderr`` as it is when the bar is made.  Counts
     beyond ``total`` are shown as 100 %.  ``clock`` (seconds, monotonic) is for tests.
     """
 
     def __init__(self, total: int, *, label: str, stream: TextIO | None = None, min_seconds: float = 1.0,
-                 clock: Callable[[], float] = time.monotonic) -> None:
+                 clock: Callable[[], float] = time.monotonic, rate_unit: str | None = None) -> None:
         if isinstance(total, bool) or not isinstance(total, int) or total < 0:
             raise InvalidInputError(f"expected `total` to be an integer >= 0, got {total!r}")
         if not isinstance(label, str):
@@ -54,6 +56,7 @@ class Progress:
         self.done = 0
         self.stream = sys.stderr if stream is None else stream
         self.min_seconds = float(min_seconds)
+        self.rate_unit = rate_unit
         self._clock = clock
         self._active = _is_tty(self.stream)
         self._start = clock()
@@ -93,7 +96,13 @@ class Progress:
         filled = int(round(fraction * _WIDTH))
         bar = "#" * filled + "." * (_WIDTH - filled)
         shown = min(self.done, self.total)
-        return f"{self.label} [{bar}] {fraction * 100:3.0f}% ({shown}/{self.total}) {now - self._start:.1f} s"
+        elapsed = now - self._start
+        line = f"{self.label} [{bar}] {fraction * 100:3.0f}% ({shown}/{self.total}) {elapsed:.1f} s"
+        if self.rate_unit is not None and self.done > 0 and elapsed > 0:
+            rate = self.done / elapsed
+            left = max(self.total - self.done, 0) / rate
+            line += f", {rate:,.0f} {self.rate_unit}/s, {left:.0f} s left"
+        return line
 
     def _draw(self, now: float) -> None:
         line = self._line(now)

@@ -7,7 +7,7 @@ A sweep file is a scene (:mod:`mechderive.scenes.schema`) with one more table::
     # or: random = { samples = 1000000, seed = 1, theta = [0.05, 3.09], psi_dot = [0.5, 40.0] }
     summary = ["motion_class", "nutation_period", "theta_min", "error_estimate"]
     chunk = 10000          # optional: points per chunk (default 10000 for a system with a batched
-                           # closed form, 50 otherwise)
+                           # closed form, 10 otherwise)
 
 Each swept key is a key of the scene's ``[parameters]`` or ``[initial]`` (``"parameters.I1"`` where
 the name is in both; ``"omega[1]"`` for an entry of a vector key).  Start and stop may carry units
@@ -45,7 +45,7 @@ __all__ = ["Axis", "Sweep", "load_sweep", "parse_sweep", "MAX_POINTS"]
 #: the most points one sweep file may ask for (a table of 10^9 rows is a cluster's job, chunk by chunk)
 MAX_POINTS = 10**10
 #: points per chunk where the system answers a batch in NumPy, and where each point is a planner run
-BATCH_CHUNK, POINT_CHUNK = 10_000, 50
+BATCH_CHUNK, POINT_CHUNK = 10_000, 10
 _SWEEP_KEYS = ("grid", "random", "summary", "chunk")
 #: the sweep-level column a summary list may name besides the system's quantities
 ERROR_ESTIMATE = "error_estimate"
