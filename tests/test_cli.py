@@ -86,7 +86,7 @@ def test_python_m_mechderive_runs_the_cli():
 def test_every_subcommand_parses_intermixed_options():
     # parse_intermixed_args raises TypeError (not a usage error) for a parser it cannot handle.
     parsers = _subcommand_parsers(build_parser())
-    assert set(parsers) == {"run", "scenes", "verify", "derive", "check", "bench", "stress"}
+    assert set(parsers) == {"run", "scenes", "verify", "derive", "check", "bench", "stress", "sweep"}
     for name, parser in parsers.items():
         with pytest.raises(SystemExit) as exc:
             parser.parse_intermixed_args(["--no-such-option"])

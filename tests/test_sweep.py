@@ -305,3 +305,18 @@ summary = ["motion_class", "nutation_period", "error_estimate"]
     bad = subprocess.run([sys.executable, "-m", "mechderive", "sweep", str(path), "-o", str(tmp_path / "m.txt")],
                          capture_output=True, text=True)
     assert bad.returncode == 2 and bad.stderr.startswith("mechderive: error: sweep output")
+
+
+def test_magnitude_bounds_the_rounding_of_a_cancelling_expression():
+    """core.rounding.magnitude: evaluating (x − y)(x + y) − (x² − y²) in doubles errs by a few ε × its magnitude."""
+    import sympy as sp
+
+    from mechderive.core.rounding import magnitude
+
+    x, y = sp.symbols("x y", real=True)
+    expr = x**2 - 2 * x * y + y**2 - 1
+    f, size = sp.lambdify((x, y), expr), sp.lambdify((x, y), magnitude(expr))
+    rng = np.random.default_rng(0)
+    for a, b in rng.uniform(-1e3, 1e3, (200, 2)):
+        exact = (mpmath.mpf(a) - mpmath.mpf(b)) ** 2 - 1
+        assert abs(f(a, b) - exact) <= 4 * 2.0**-52 * size(a, b)

@@ -9,7 +9,9 @@ the expression, it turns a value's rounding into a measured estimate, point by p
 >>> import sympy as sp
 >>> x, y = sp.symbols("x y", real=True)
 >>> magnitude(x**2 - y**2)
-Abs(x)**2 + Abs(y)**2
+x**2 + y**2
+>>> magnitude((x - y) / (x + y))
+(Abs(x) + Abs(y))/Abs(x + y)
 """
 
 from __future__ import annotations

@@ -152,7 +152,7 @@ def _binary_exact(exprs: list) -> list:
     from ...errors import DerivationError
 
     for e in exprs:
-        for c in sp.sympify(e).atoms(sp.Rational, sp.Float):
+        for c in (e.atoms(sp.Rational, sp.Float) if isinstance(e, sp.Basic) else ()):
             if isinstance(c, sp.Float) or c.q & (c.q - 1):
                 raise DerivationError(f"expected constants exact in binary in the batched closed form, got {c} in {e}")
     return exprs
