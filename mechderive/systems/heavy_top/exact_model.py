@@ -33,7 +33,7 @@ from . import model as heavy_model
 __all__ = ["HeavyTopExactModel", "model", "u1", "u2", "u3"]
 
 u1, u2, u3 = sp.symbols("u1 u2 u3", real=True)
-_kappa, _m = sp.symbols("kappa m", positive=True)
+_m = sp.Symbol("m", positive=True)
 _x = sp.Symbol("x", nonnegative=True)  # sn²
 
 
@@ -60,17 +60,21 @@ class HeavyTopExactModel(SymbolicModel):
         """κ² and m of u = u1 + (u2 - u1) sn²(κ t + v0 | m), from u̇² = f(u) identically in sn²."""
         u = heavy_model.u
         sn, cn, dn = sp.symbols("sn cn dn", real=True)
+        # κ² and κ² m enter the identity linearly: solved for as (K2, P) by linear algebra, m = P / K2
+        k2, p = sp.symbols("K2 P")
         ansatz = u1 + (u2 - u1) * sn**2
-        u_dot_sq = (2 * (u2 - u1) * sn * cn * dn * _kappa) ** 2
+        u_dot_sq = 4 * (u2 - u1) ** 2 * sn**2 * cn**2 * dn**2 * k2  # (d/dt of the ansatz)², κ² = K2
         residual = sp.expand((u_dot_sq - self.cubic_in_roots.subs(u, ansatz))
                              .subs({cn**2: 1 - sn**2, dn**2: 1 - _m * sn**2}))
-        residual = sp.expand(residual.subs(sn, sp.sqrt(_x)))
+        residual = sp.expand(sp.expand(residual.subs(sn, sp.sqrt(_x))).subs(k2 * _m, p))
+        if _m in residual.free_symbols:
+            raise DerivationError(f"expected m only in κ² m in the nutation identity, got {residual}")
         coeffs = sp.Poly(residual, _x).all_coeffs()
-        sol = sp.solve([c for c in coeffs if c != 0], [_kappa, _m], dict=True)
-        if len(sol) != 1:
-            raise DerivationError(f"expected one (κ, m) for the nutation ansatz, got {sol}")
-        kappa_sq = sp.factor(sol[0][_kappa] ** 2)
-        m = sp.factor(sol[0][_m])
+        sol = list(sp.linsolve([c for c in coeffs if c != 0], [k2, p]))
+        if len(sol) != 1 or any(v.free_symbols & {k2, p} for v in sol[0]):
+            raise DerivationError(f"expected one (κ², κ² m) for the nutation ansatz, got {sol}")
+        kappa_sq = sp.factor(sol[0][0])
+        m = sp.factor(sol[0][1] / sol[0][0])
         return {"kappa2": kappa_sq, "m": m, "m1": sp.factor(1 - m)}
 
     def _partial_fractions(self, rate_u: sp.Expr) -> dict:

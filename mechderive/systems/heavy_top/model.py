@@ -354,8 +354,12 @@ class HeavyTopModel(LagrangianModel):
         for sign in (-1, 1):
             expr = c[b] + sign * c[a]
             in_h = sp.expand_trig(expr.subs(theta, 2 * h))
-            half = sp.factor(sp.trigsimp(sp.factor(in_h)))
-            if sp.expand(simplify_trig(half - in_h)) != 0:
+            # the normal form modulo sin² + cos² = 1 (in sin h), factored: b − a has the factor sin²h; b + a the
+            # factor (sin h − 1)(sin h + 1), which is −cos²h — written so, or 1 − sin h would cancel at the bottom
+            half = sp.factor(trig_normal(in_h)).subs((sp.sin(h) - 1) * (sp.sin(h) + 1), -sp.cos(h) ** 2)
+            if not any(f in (sp.sin(h) ** 2, sp.cos(h) ** 2) for f in sp.Mul.make_args(half)):
+                half = sp.factor(sp.trigsimp(sp.factor(in_h)))  # the general (slow) route
+            if trig_normal(half - in_h) != 0:
                 raise DerivationError(f"expected b {'+' if sign > 0 else '−'} a in the half angle, got {half}")
             out.append(half.subs(h, theta / 2))
         return tuple(out)  # type: ignore[return-value]
