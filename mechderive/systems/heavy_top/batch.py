@@ -167,9 +167,10 @@ def _columns(f: Any, args: tuple, n: int) -> list[np.ndarray]:
     return [_array(v, n, dtype) for v in f(*args)]
 
 
-def _valid(p: dict[str, np.ndarray], s: dict[str, np.ndarray], strict: bool) -> np.ndarray:
+def _valid(p: dict[str, np.ndarray], s: dict[str, np.ndarray], strict: bool, mgl: bool) -> np.ndarray:
     """Points the parameter and state checks accept (:mod:`.parameters`); the rest go one by one (and are
-    refused there, with the checks' own message)."""
+    refused there, with the checks' own message).  ``mgl``: the top was given by M g l alone (realised as
+    M = 1, g = Mgl, l = 1), whose rigid-body condition is I1 ≥ I3/2."""
     ok = np.ones(len(s["theta"]), dtype=bool)
     for v in (*p.values(), *s.values()):
         ok &= np.isfinite(v) & (np.abs(v) < 1e100)  # far from order one: the planner solves in scaled units
@@ -177,7 +178,8 @@ def _valid(p: dict[str, np.ndarray], s: dict[str, np.ndarray], strict: bool) -> 
     ok &= (s["theta"] > 0) & (s["theta"] < np.pi)  # the poles: sleeping and hanging tops, steady there
     if strict:
         # the rigid-body condition, with a margin: on the boundary the single path's rounding decides
-        ok &= (p["I1"] - p["M"] * p["l"] ** 2 - p["I3"] / 2) > 1e-12 * (p["I1"] + p["I3"])
+        arm = 0.0 if mgl else p["M"] * p["l"] ** 2
+        ok &= (p["I1"] - arm - p["I3"] / 2) > 1e-12 * (p["I1"] + p["I3"])
     return ok
 
 
@@ -386,10 +388,11 @@ def summarize_batch(parameters: Mapping[str, Any], initial: Mapping[str, Any], n
     """
     n = len(np.atleast_1d(initial["theta"]))
     p = {k: _array(v, n) for k, v in parameters.items()}
-    if "Mgl" in p:  # as check_params realises it: M = 1, g = Mgl, l = 1 (the same M g l)
+    mgl = "Mgl" in p
+    if mgl:  # as check_params realises it: M = 1, g = Mgl, l = 1 (the same M g l)
         p = {"I1": p["I1"], "I3": p["I3"], "M": np.ones(n), "g": p["Mgl"], "l": np.ones(n)}
     s = {k: _array(initial.get(k, 0.0), n) for k in ("theta", "theta_dot", "phi_dot", "psi_dot")}
-    fallback = ~_valid(p, s, strict)
+    fallback = ~_valid(p, s, strict, mgl)
     if any(name not in BATCHED for name in names):
         fallback[:] = True
     values: dict[str, np.ndarray] = {name: np.full(n, np.nan) for name in names}
