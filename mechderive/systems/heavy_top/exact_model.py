@@ -43,6 +43,35 @@ def _is_zero_rational(expr: sp.Expr) -> bool:
     return sp.cancel(expr) == 0 or sp.simplify(expr) == 0
 
 
+def _simple_poles(along: sp.Expr, x: sp.Symbol) -> tuple[sp.Expr, list[tuple[sp.Expr, sp.Expr]]]:
+    """(c0, [(c_i, n_i)]) with ``along`` = c0 + Σ c_i / (1 − n_i x) identically in x (simple poles only, the
+    terms of one pole merged), checked by rebuilding it."""
+    c0, terms = sp.Integer(0), []
+    for term in sp.Add.make_args(sp.expand(sp.apart(along, x, full=False))):
+        num, den = sp.fraction(sp.factor(term))
+        if not den.has(x):
+            c0 += term
+            continue
+        poly = sp.Poly(den, x)
+        if poly.degree() != 1:
+            raise DerivationError(f"expected simple poles in sn², got denominator {den}")
+        if num.has(x):
+            raise DerivationError(f"expected a constant numerator, got {num}")
+        d1, d0 = poly.all_coeffs()
+        c, n = num / d0, sp.factor(-d1 / d0)
+        for k, (c_old, n_old) in enumerate(terms):
+            if _is_zero_rational(n - n_old):  # the same pole: one term
+                terms[k] = (c_old + c, n_old)
+                break
+        else:
+            terms.append((c, n))
+    terms = [(sp.factor(c), n) for c, n in terms]
+    rebuilt = c0 + sum(c / (1 - n * x) for c, n in terms)
+    if not _is_zero_rational(sp.together(rebuilt - along)):
+        raise DerivationError("partial fractions do not reproduce the rate")
+    return sp.factor(c0), terms
+
+
 class HeavyTopExactModel(SymbolicModel):
     """Derived constants of u(t) and the partial fractions of φ̇ and ψ̇ along it."""
 
@@ -80,34 +109,8 @@ class HeavyTopExactModel(SymbolicModel):
     def _partial_fractions(self, rate_u: sp.Expr) -> dict:
         """rate(u) along the ansatz as c0 + Σ c_i/(1 - n_i x), x = sn²; returns {"c0": .., "terms": [(c_i, n_i)]}."""
         u = heavy_model.u
-        along = sp.together(rate_u.subs(u, u1 + (u2 - u1) * _x))
-        parts = sp.apart(along, _x, full=False)
-        c0 = sp.Integer(0)
-        terms = []
-        for term in sp.Add.make_args(sp.expand(parts)):
-            num, den = sp.fraction(sp.factor(term))
-            if not den.has(_x):
-                c0 += term
-                continue
-            poly = sp.Poly(den, _x)
-            if poly.degree() != 1:
-                raise DerivationError(f"expected simple poles in sn², got denominator {den}")
-            d1, d0 = poly.all_coeffs()
-            if num.has(_x):
-                raise DerivationError(f"expected a constant numerator, got {num}")
-            c, n = num / d0, sp.factor(-d1 / d0)
-            for k, (c_old, n_old) in enumerate(terms):
-                if _is_zero_rational(n - n_old):  # same pole: merge the numerators
-                    terms[k] = (c_old + c, n_old)
-                    break
-            else:
-                terms.append((c, n))
-        terms = [(sp.factor(c), n) for c, n in terms]
-        # Check: the decomposition reproduces the rate identically in x.
-        rebuilt = c0 + sum(c / (1 - n * _x) for c, n in terms)
-        if not _is_zero_rational(sp.together(rebuilt - along)):
-            raise DerivationError("partial fractions do not reproduce the rate")
-        return {"c0": sp.factor(c0), "terms": terms}
+        c0, terms = _simple_poles(sp.together(rate_u.subs(u, u1 + (u2 - u1) * _x)), _x)
+        return {"c0": c0, "terms": terms}
 
     @derived
     def f_taylor_state(self) -> tuple[sp.Expr, ...]:
@@ -159,26 +162,7 @@ class HeavyTopExactModel(SymbolicModel):
         num_w = sp.Poly(sp.expand(num.subs(hm.u, hm.u0 + w)), w)
         coeffs = num_w.all_coeffs()
         num_shift = sum(c * w ** k for k, c in enumerate(reversed(coeffs[:-1]), start=1)) + rate0
-        along = sp.together((num_shift / (const * factored_den)).subs(w, w1 + amp * x))
-        parts = sp.apart(along, x, full=False)
-        c0, terms = sp.Integer(0), []
-        for term in sp.Add.make_args(sp.expand(parts)):
-            n_, d_ = sp.fraction(sp.factor(term))
-            if not d_.has(x):
-                c0 += term
-                continue
-            p1, p0 = sp.Poly(d_, x).all_coeffs()
-            c, n = n_ / p0, sp.factor(-p1 / p0)
-            for k, (c_old, n_old) in enumerate(terms):
-                if _is_zero_rational(n - n_old):  # the same pole: one term
-                    terms[k] = (c_old + c, n_old)
-                    break
-            else:
-                terms.append((c, n))
-        terms = [(sp.factor(c), n) for c, n in terms]
-        rebuilt = c0 + sum(c / (1 - n * x) for c, n in terms)
-        if not _is_zero_rational(sp.together(rebuilt - along)):
-            raise DerivationError("the shifted partial fractions do not reproduce φ̇")
+        c0, terms = _simple_poles(sp.together((num_shift / (const * factored_den)).subs(w, w1 + amp * x)), x)
         th = hm.theta
         cfs = hm.model().constants_from_state
         values = {rate0: sp.factor(trig_normal(coeffs[-1].subs(hm.u0, sp.cos(th)).subs(cfs)))}
@@ -189,7 +173,7 @@ class HeavyTopExactModel(SymbolicModel):
                 raise DerivationError(f"expected cos θ − {r} = {half}")
             values[d] = half
         args = [hm.I1, hm.I3, hm.a, rate0, *sorted(gaps, key=str), w1, amp]
-        return {"c0": sp.factor(c0), "terms": terms, "args": args, "values": values}
+        return {"c0": c0, "terms": terms, "args": args, "values": values}
 
     @derived
     def precession_fractions(self) -> dict:
