@@ -356,3 +356,18 @@ def test_any_body_any_launch_batched_or_one_by_one_never_differs(I1, ratio, Mgl,
             assert got == single[name]
         else:
             assert abs(got - single[name]) <= 1e-12 * abs(single[name]), (name, got, single[name])
+
+
+def test_bad_runs_are_refused_before_any_work_and_leave_nothing_behind(tmp_path):
+    sw = sweep_of(grid={"theta": [0.1, 0.2, 2]}, summary=["theta_min"])
+    with pytest.raises(InvalidInputError, match="expected an existing directory"):
+        run_sweep(sw, tmp_path / "nowhere" / "map.csv")
+    with pytest.raises(InvalidInputError, match="--workers"):
+        run_sweep(sw, tmp_path / "map.csv", workers=0)
+    with pytest.raises(InvalidInputError, match="local:N"):
+        run_sweep(sw, tmp_path / "map.csv", dask="local:none")
+    assert list(tmp_path.iterdir()) == []  # no parts directory to trip a later run
+    with pytest.raises(InvalidInputError, match="at most 1e\\+10 points, got 1000000000000000000000$"):
+        sweep_of(grid={k: [0.1, 0.2, 10**7] for k in ("theta", "psi_dot", "phi_dot")})
+    with pytest.raises(InvalidInputError, match="^sweep key summary"):
+        sweep_of(grid={"theta": [0.1, 0.2, 2]}, summary=["theta_min", "colour"])

@@ -154,6 +154,10 @@ def run_sweep(sweep: Sweep, output: os.PathLike | str, *, workers: int | None = 
     after chunk k is written (tests use it to interrupt or kill mid-sweep).
     """
     output = check_output(output)
+    if workers is None:
+        workers = os.cpu_count() or 1
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise InvalidInputError(f"sweep --workers: expected an integer >= 1, got {workers!r}")
     parts = Parts(output.with_name(output.name + ".parts"), sweep.fingerprint, sweep.chunks, sweep.points)
     done = parts.start(resume=resume)
     todo = [k for k in range(sweep.chunks) if k not in set(done)]
@@ -170,19 +174,20 @@ def run_sweep(sweep: Sweep, output: os.PathLike | str, *, workers: int | None = 
         if on_chunk is not None:
             on_chunk(k)
 
-    if workers is None:
-        workers = os.cpu_count() or 1
-    if todo and not dask and workers > 1 and len(todo) > 1:
-        _warm(sweep)
-    if workers < 1:
-        raise InvalidInputError(f"sweep --workers: expected an integer >= 1, got {workers}")
     extra: dict[str, Any] = {}
-    if dask:
-        extra = _dask(source, sweep.name, todo, dask, arrived)
-        backend = f"dask {dask}"
-    else:
-        _local(source, sweep.name, todo, min(workers, max(len(todo), 1)), arrived)
-        backend = f"local, {workers} worker{'s' if workers != 1 else ''}"
+    try:
+        if todo and not dask and workers > 1 and len(todo) > 1:
+            _warm(sweep)
+        if dask:
+            extra = _dask(source, sweep.name, todo, dask, arrived)
+            backend = f"dask {dask}"
+        else:
+            _local(source, sweep.name, todo, min(workers, max(len(todo), 1)), arrived)
+            backend = f"local, {workers} worker{'s' if workers != 1 else ''}"
+    except BaseException:
+        if not any(parts.chunk_path(k).exists() for k in range(sweep.chunks)):
+            parts.remove()  # nothing to resume from (a cluster not reached, an error before the first chunk)
+        raise
     wall = time.perf_counter() - start
     order = columns_of(sweep)
     table = parts.assemble(order)

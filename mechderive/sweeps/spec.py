@@ -243,7 +243,10 @@ def parse_sweep(document: Mapping[str, Any], *, name: str = "") -> Sweep:
                                 "(`mechderive scenes --quantities SYSTEM` lists them)")
     output["summary"] = quantities
     doc["output"] = output
-    scene = parse_scene(doc, name=name or None)
+    try:
+        scene = parse_scene(doc, name=name or None)
+    except InvalidInputError as exc:  # the summary list is the sweep's, wherever the scene checks it
+        raise InvalidInputError(str(exc).replace("scene key [output].summary", "sweep key summary")) from None
     kind = "grid" if "grid" in table else "random"
     spec = table[kind]
     if not isinstance(spec, Mapping):
@@ -258,7 +261,7 @@ def parse_sweep(document: Mapping[str, Any], *, name: str = "") -> Sweep:
     axes = tuple(_axis(scene, k, v, kind) for k, v in spec.items())
     if len({(a.table, a.key, a.index) for a in axes}) != len(axes):
         raise InvalidInputError("sweep: a key is swept twice")
-    points = int(np.prod([a.count for a in axes])) if kind == "grid" else samples
+    points = math.prod(a.count for a in axes) if kind == "grid" else samples  # Python ints: no overflow
     if points > MAX_POINTS:
         raise InvalidInputError(f"sweep: expected at most {MAX_POINTS:.0e} points, got {points}")
     default_chunk = BATCH_CHUNK if _has_batch(scene) else POINT_CHUNK

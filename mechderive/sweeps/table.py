@@ -105,7 +105,12 @@ def _check_suffix(path: Path) -> str:
 def check_output(path: os.PathLike | str) -> Path:
     """The output path, its suffix checked (before any point is computed); parquet needs pyarrow."""
     path = Path(path)
-    if _check_suffix(path) == ".parquet":
+    _check_suffix(path)
+    parent = path.parent if str(path.parent) else Path(".")
+    if not parent.is_dir():
+        raise InvalidInputError(f"sweep output {str(path)!r}: expected an existing directory, got "
+                                f"{str(parent)!r}, which is not one")
+    if path.suffix.lower() == ".parquet":
         try:
             import pyarrow  # noqa: F401
         except ImportError:
