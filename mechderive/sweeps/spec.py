@@ -7,7 +7,7 @@ A sweep file is a scene (:mod:`mechderive.scenes.schema`) with one more table::
     # or: random = { samples = 1000000, seed = 1, theta = [0.05, 3.09], psi_dot = [0.5, 40.0] }
     summary = ["motion_class", "nutation_period", "theta_min", "error_estimate"]
     chunk = 10000          # optional: points per chunk (default 10000 for a system with a batched
-                           # closed form, 10 otherwise)
+                           # closed form, 10 otherwise; a small sweep in ~64 chunks, at least 10 points each)
 
 Each swept key is a key of the scene's ``[parameters]`` or ``[initial]`` (``"parameters.I1"`` where
 the name is in both; ``"omega[1]"`` for an entry of a vector key).  Start and stop may carry units
@@ -264,7 +264,8 @@ def parse_sweep(document: Mapping[str, Any], *, name: str = "") -> Sweep:
     points = math.prod(a.count for a in axes) if kind == "grid" else samples  # Python ints: no overflow
     if points > MAX_POINTS:
         raise InvalidInputError(f"sweep: expected at most {MAX_POINTS:.0e} points, got {points}")
-    default_chunk = BATCH_CHUNK if _has_batch(scene) else POINT_CHUNK
+    # a small sweep is still cut into ~64 chunks so that every worker has some (a function of the file alone)
+    default_chunk = min(BATCH_CHUNK if _has_batch(scene) else POINT_CHUNK, max(10, -(-points // 64)))
     chunk = _count("chunk", table.get("chunk", default_chunk), 1, 10**7)
     sweep = Sweep(doc, scene, axes, kind, points, seed, tuple(quantities), chunk, name=scene.name or "",
                   source=copy.deepcopy(dict(document)))
