@@ -51,8 +51,6 @@ def sweep_throughput(*, quick: bool = False) -> dict:
     """{rows: [{sweep, backend, points, seconds, points_per_second, one_by_one, identical}], ...}."""
     import numpy as np
 
-    from ..sweeps.evaluate import BASE_COLUMNS  # noqa: F401  (the table's columns are compared below)
-
     points = 20_000 if quick else 200_000
     rows = []
     with tempfile.TemporaryDirectory(prefix="mechderive-bench-sweep-") as tmp:

@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import MechDeriveError
-from .spec import ERROR_ESTIMATE, Sweep
+from .spec import ERROR_ESTIMATE, Sweep, has_batch
 
 __all__ = ["evaluate_chunk", "BASE_COLUMNS"]
 
@@ -76,7 +76,7 @@ def evaluate_chunk(sweep: Sweep, k: int) -> dict[str, np.ndarray]:
     notes = np.full(n, "", dtype=object)
     todo: np.ndarray = np.arange(n)
     model = sweep.scene.model
-    if n and type(model).summarize_batch is not _base_batch():
+    if n and has_batch(model):
         parameters, initial = sweep.batch_inputs(swept)
         batch = model.summarize_batch(parameters, initial, names, strict=sweep.scene.strict)
         if batch is not None:
@@ -125,9 +125,3 @@ def evaluate_chunk(sweep: Sweep, k: int) -> dict[str, np.ndarray]:
     table[ERROR_ESTIMATE] = worst
     table["status"], table["path"], table["notes"] = status, path, notes
     return table
-
-
-def _base_batch() -> Any:
-    from ..systems.base import System
-
-    return System.summarize_batch

@@ -18,17 +18,15 @@ import functools
 import json
 import multiprocessing
 import os
-import sys
 import time
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
 
 from ..errors import InvalidInputError
-from .evaluate import BASE_COLUMNS, _base_batch, evaluate_chunk
-from .spec import Sweep, parse_sweep
+from .evaluate import BASE_COLUMNS, evaluate_chunk
+from .spec import Sweep, has_batch, parse_sweep
 from .table import Parts, check_output, write_table
 
 __all__ = ["SweepResult", "run_sweep", "columns_of", "MAX_ATTEMPTS"]
@@ -138,7 +136,7 @@ def _warm(sweep: Sweep) -> None:
     from .evaluate import _run_point
 
     values = {name: col[:1] for name, col in sweep.chunk_values(0).items()}
-    if type(sweep.scene.model).summarize_batch is not _base_batch():
+    if has_batch(sweep.scene.model):
         parameters, initial = sweep.batch_inputs(values)
         sweep.scene.model.summarize_batch(parameters, initial, sweep.summary, strict=sweep.scene.strict)
     _run_point(sweep, {name: float(col[0]) for name, col in values.items()})

@@ -40,7 +40,7 @@ import numpy as np
 from ..errors import InvalidInputError
 from ..scenes.schema import Scene, _parse_toml, _read_file, parse_scene
 
-__all__ = ["Axis", "Sweep", "load_sweep", "parse_sweep", "MAX_POINTS"]
+__all__ = ["Axis", "Sweep", "load_sweep", "parse_sweep", "has_batch", "MAX_POINTS"]
 
 #: the most points one sweep file may ask for (a table of 10^9 rows is a cluster's job, chunk by chunk)
 MAX_POINTS = 10**10
@@ -265,17 +265,18 @@ def parse_sweep(document: Mapping[str, Any], *, name: str = "") -> Sweep:
     if points > MAX_POINTS:
         raise InvalidInputError(f"sweep: expected at most {MAX_POINTS:.0e} points, got {points}")
     # a small sweep is still cut into ~64 chunks so that every worker has some (a function of the file alone)
-    default_chunk = min(BATCH_CHUNK if _has_batch(scene) else POINT_CHUNK, max(10, -(-points // 64)))
+    default_chunk = min(BATCH_CHUNK if has_batch(scene.model) else POINT_CHUNK, max(10, -(-points // 64)))
     chunk = _count("chunk", table.get("chunk", default_chunk), 1, 10**7)
     sweep = Sweep(doc, scene, axes, kind, points, seed, tuple(quantities), chunk, name=scene.name or "",
                   source=copy.deepcopy(dict(document)))
     return _with_fingerprint(sweep)
 
 
-def _has_batch(scene: Scene) -> bool:
+def has_batch(model: Any) -> bool:
+    """Whether the system ``model`` answers chunks in NumPy (overrides :meth:`System.summarize_batch`)."""
     from ..systems.base import System
 
-    return type(scene.model).summarize_batch is not System.summarize_batch
+    return type(model).summarize_batch is not System.summarize_batch
 
 
 def _with_fingerprint(sweep: Sweep) -> Sweep:

@@ -74,8 +74,6 @@ _N_MARGIN = 1e-3
 @functools.cache
 def _functions() -> dict[str, Any]:
     """The derived constants compiled for NumPy (disk cache: derived and compiled once per install)."""
-    import sympy as sp  # noqa: F401  (only inside the builds, on a cold cache)
-
     from ...core.codecache import cached_lambdify
     from . import exact
     from . import model as hm
