@@ -370,3 +370,16 @@ def test_bad_runs_are_refused_before_any_work_and_leave_nothing_behind(tmp_path)
         sweep_of(grid={k: [0.1, 0.2, 10**7] for k in ("theta", "psi_dot", "phi_dot")})
     with pytest.raises(InvalidInputError, match="^sweep key summary"):
         sweep_of(grid={"theta": [0.1, 0.2, 2]}, summary=["theta_min", "colour"])
+
+
+def test_descriptive_quantities_of_a_nutating_top_are_batched_as_the_single_path_gives_them():
+    """``steady`` ({"kind": "none"}) and ``minimum_spin`` (does not apply: not sleeping) of nutating tops come
+    from the batch with the single path's value and reason, not one by one."""
+    sw = sweep_of(grid={"theta": [0.3, 2.5, 3], "psi_dot": [5.0, 30.0, 2]}, summary=["steady", "minimum_spin"])
+    table = evaluate_chunk(sw, 0)
+    assert set(table["path"]) == {"batch"}
+    for i in range(sw.points):
+        status, single, why = _run_point(sw, {"theta": float(table["theta"][i]), "psi_dot": float(table["psi_dot"][i])})
+        assert json.loads(table["steady"][i]) == single["steady"]
+        assert single["minimum_spin"] is None and np.isnan(table["minimum_spin"][i])
+        assert table["notes"][i] == f"minimum_spin: {why['minimum_spin']}"

@@ -91,6 +91,16 @@ def evaluate_chunk(sweep: Sweep, k: int) -> dict[str, np.ndarray]:
                     columns[name] = np.array(["" if f else (v if isinstance(v, str) else _text(v))
                                               for f, v in zip(fallback, vals)], dtype=object)
                 errors[name] = np.where(fallback, math.nan, np.asarray(batch.errors[name], dtype=float))
+            for name, why in (batch.reasons or {}).items():
+                if name not in columns:
+                    continue
+                why = np.asarray(why, dtype=object)
+                absent = ~fallback & np.array([isinstance(w, str) for w in why], dtype=bool)
+                if absent.any():
+                    columns[name][absent] = math.nan if columns[name].dtype == float else ""
+                    errors[name][absent] = math.nan
+                    for i in np.flatnonzero(absent):
+                        notes[i] = f"{notes[i]}; {name}: {why[i]}" if notes[i] else f"{name}: {why[i]}"
             path[~fallback] = "batch"
             todo = np.flatnonzero(fallback)
     for i in todo:

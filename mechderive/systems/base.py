@@ -94,11 +94,14 @@ class BatchSummary(NamedTuple):
     True where the batch did not answer (a point refused, ill-conditioned, a quantity that does not
     apply or is not a plain number): the sweep computes those points one by one through the planner,
     which gives the value, the estimate or the reason.  Values at fallback points are ignored.
+    ``reasons[name]`` (optional): an object array, a string where the quantity does not apply to an
+    answered point (its value is then None, as :meth:`System.summarize` says it), None elsewhere.
     """
 
     values: dict
     errors: dict
     fallback: Any
+    reasons: dict = {}
 
 
 class OutOfReach(InvalidInputError):

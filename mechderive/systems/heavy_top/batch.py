@@ -58,7 +58,10 @@ __all__ = ["summarize_batch", "BATCHED", "TIERS"]
 #: the quantities answered here; the others (``steady``, ``minimum_spin``: not plain numbers, or not
 #: defined for most motions) always go one by one
 BATCHED = ("nutation_period", "period", "theta_min", "theta_max", "u1", "u2", "u3", "mean_precession_rate",
-           "precession_per_nutation", "motion_class", "energy", "p_phi", "p_psi")
+           "precession_per_nutation", "motion_class", "energy", "p_phi", "p_psi", "steady", "minimum_spin")
+#: answered without computation for a nutating top launched off the poles (as the single path answers them):
+#: ``steady`` is {"kind": "none"}, ``minimum_spin`` does not apply (the top is not sleeping)
+_DESCRIPTIVE = ("steady", "minimum_spin")
 
 #: the precisions tried in turn: doubles, then extended precision where the platform has it
 TIERS = (np.float64,) + ((np.longdouble,) if np.finfo(np.longdouble).eps < 1e-18 else ())
@@ -348,7 +351,7 @@ def _tier(P: list[np.ndarray], S: list[np.ndarray], names: tuple[str, ...], dtyp
             out["p_phi"] = (inv[1], (np.abs(inv[1] - P[0] * b) + 8 * eps * size_p).astype(float))
             out["p_psi"] = (inv[2], (np.abs(inv[2] - P[0] * a) + 8 * eps * P[1] * w3).astype(float))
         for name in names:
-            if name == "motion_class":
+            if name in ("motion_class", *_DESCRIPTIVE):
                 continue
             value, err = out[name]
             value = value.astype(float)
@@ -374,6 +377,8 @@ def _tier(P: list[np.ndarray], S: list[np.ndarray], names: tuple[str, ...], dtyp
                                         np.where(g[:, 0] * g[:, 1] > 0, "monotonic precession", "looping")))
             values["motion_class"] = classes.astype(object)
             errors["motion_class"] = np.full(n, np.nan)
+        if "steady" in names:
+            ok &= amp > 1e-10  # far from figure 44's uniform precession (u2 − u1 ≤ 1e-12): a nutating top
     return values, errors, ok
 
 
@@ -395,8 +400,9 @@ def summarize_batch(parameters: Mapping[str, Any], initial: Mapping[str, Any], n
         fallback[:] = True
     values: dict[str, np.ndarray] = {name: np.full(n, np.nan) for name in names}
     errors: dict[str, np.ndarray] = {name: np.full(n, np.nan) for name in names}
-    if "motion_class" in values:
-        values["motion_class"] = np.full(n, "", dtype=object)
+    for name in ("motion_class", "steady"):
+        if name in values:
+            values[name] = np.full(n, "", dtype=object)
     todo = np.flatnonzero(~fallback)
     P = [p[k] for k in ("I1", "I3", "M", "g", "l")]
     S = [s[k] for k in ("theta", "theta_dot", "phi_dot", "psi_dot")]
@@ -405,8 +411,23 @@ def summarize_batch(parameters: Mapping[str, Any], initial: Mapping[str, Any], n
             break
         got, est, ok = _tier([x[todo] for x in P], [x[todo] for x in S], names, dtype)
         for name in names:
-            values[name][todo[ok]] = got[name][ok]
-            errors[name][todo[ok]] = est[name][ok]
+            if name not in _DESCRIPTIVE:
+                values[name][todo[ok]] = got[name][ok]
+                errors[name][todo[ok]] = est[name][ok]
         todo = todo[~ok]
     fallback[todo] = True
-    return BatchSummary(values, errors, fallback)
+    reasons = {}
+    answered = np.flatnonzero(~fallback)
+    if "steady" in names:
+        from .summary import NOT_STEADY
+
+        for i in answered:
+            values["steady"][i] = dict(NOT_STEADY)
+    if "minimum_spin" in names:
+        from .summary import not_sleeping
+
+        why = np.full(n, None, dtype=object)
+        for i in answered:  # θ0 in (0, π) at every answered point: none is sleeping
+            why[i] = not_sleeping(float(s["theta"][i]), float(s["theta_dot"][i]))
+        reasons["minimum_spin"] = why
+    return BatchSummary(values, errors, fallback, reasons)

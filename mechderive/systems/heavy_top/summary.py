@@ -104,6 +104,16 @@ def summarize(scene: "Scene", solved: Solved, t: np.ndarray, names: tuple[str, .
         return {n: closed.of(n) for n in names}
 
 
+def not_sleeping(theta: float, theta_dot: float) -> str:
+    """Why ``minimum_spin`` does not apply to a top launched at θ, θ̇ (also the batch's reason)."""
+    return (f"applies to a sleeping top (θ = θ̇ = 0 at t = 0, (3.82)); this one starts at θ = {theta:.6g} rad, "
+            f"θ̇ = {theta_dot:.6g} rad/s")
+
+
+#: ``steady``'s value for a motion that is not steady (nutating): no rates to give
+NOT_STEADY = {"kind": "none"}
+
+
 # --- from the closed form ----------------------------------------------------------------------------
 
 def _rounding(x_mp: Any) -> tuple[float, float]:
@@ -294,15 +304,14 @@ class _Closed:
     def _minimum_spin(self) -> Pair:
         if not self._sleeping():
             s = self.sol.initial
-            return None, (f"applies to a sleeping top (θ = θ̇ = 0 at t = 0, (3.82)); this one starts at θ = "
-                          f"{s['theta']:.6g} rad, θ̇ = {s['theta_dot']:.6g} rad/s")
+            return None, not_sleeping(s["theta"], s["theta_dot"])
         return _rounding(self._minimum_spin_mp())
 
     def _steady(self) -> Pair:
         mp, sol = self.mp, self.sol
         w3, w3_err = _rounding(self.w3)
         if not self.steady_motion:
-            return {"kind": "none"}, None
+            return dict(NOT_STEADY), None
         th0 = sol.initial["theta"]
         if self._sleeping():
             ms, ms_err = _rounding(self._minimum_spin_mp())
