@@ -54,6 +54,8 @@ _PUBLIC = {
     "register_system": "mechderive.systems.registry",
     "rigid_body": "mechderive.systems.rigid_body.system",
     "from_lagrangian": "mechderive.systems.lagrangian",
+    "load_sweep": "mechderive.sweeps.spec",
+    "run_sweep": "mechderive.sweeps.run",
 }
 
 __all__ = sorted(_PUBLIC) + ["__version__"]
