@@ -383,3 +383,19 @@ def test_descriptive_quantities_of_a_nutating_top_are_batched_as_the_single_path
         assert json.loads(table["steady"][i]) == single["steady"]
         assert single["minimum_spin"] is None and np.isnan(table["minimum_spin"][i])
         assert table["notes"][i] == f"minimum_spin: {why['minimum_spin']}"
+
+
+def test_a_sweep_on_a_local_dask_cluster_interrupted_resumes_to_the_same_table(tmp_path):
+    sw = sweep_of(grid=SMALL, summary=["theta_min", "motion_class"], chunk=4)
+    whole = run_sweep(sw, tmp_path / "whole.npz", workers=1).table
+
+    def interrupt(k):
+        raise KeyboardInterrupt  # Ctrl-C as the first chunk comes back
+
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(sw, tmp_path / "cut.npz", dask="local:2", on_chunk=interrupt)
+    written = len(list((tmp_path / "cut.npz.parts").glob("chunk-*.npz")))
+    assert 1 <= written < sw.chunks
+    resumed = run_sweep(sw, tmp_path / "cut.npz", dask="local:2", resume=True)
+    assert resumed.report["resumed_chunks"] == written
+    assert same(whole, resumed.table)
