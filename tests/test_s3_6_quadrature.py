@@ -83,3 +83,116 @@ def test_kepler_in_time_is_not_a_quartic_in_one_over_r():
 def test_an_explicitly_time_dependent_lagrangian_has_no_conserved_energy():
     with pytest.raises(NoQuadrature, match="explicit time"):
         reduce_to_quadrature(LagrangianModel(m * r.diff(t) ** 2 / 2 - k * r**2 * sp.cos(t) / 2, [r]))
+
+
+# --- one motion: turning points and period against independent references ---------------------------
+
+import mpmath  # noqa: E402
+
+from mechderive.core.quadrature import oscillation  # noqa: E402
+
+
+def _period_by_quadrature(P, a, b):
+    """2∫_a^b du/√P(u) by mpmath's tanh-sinh at 50 digits, with u = (a + b)/2 + (b − a)/2 sin φ taking out the
+    endpoints' 1/√ singularities (the integrand (b − a)/2 cos φ / √P(u) stays finite)."""
+    with mpmath.workdps(50):
+        c, h = (a + b) / 2, (b - a) / 2
+        # (the 40-digit roots leave P ~ -1e-40 at the very ends: the real part)
+        return mpmath.re(2 * mpmath.quad(lambda f: h * mpmath.cos(f) / mpmath.sqrt(P(c + h * mpmath.sin(f))),
+                                         [-mpmath.pi / 2, mpmath.pi / 2]))
+
+
+def _pendulum():
+    return find_substitution(reduce_to_quadrature(LagrangianModel(
+        m * l**2 * th.diff(t) ** 2 / 2 + m * g * l * sp.cos(th), [th])))
+
+
+@pytest.mark.parametrize("th0, thd0, kind", [(1.0, 0.0, "libration"), (0.3, 2.0, "libration"), (3.0, 0.1, "libration"),
+                                             (0.0, 7.0, "rotation"), (2.0, 5.0, "rotation")])
+def test_pendulum_period_libration_and_rotation(th0, thd0, kind):
+    """u = cos θ folds at θ = 0 and π.  Libration: T = 4K(sin²(θmax/2))/√(g/l) (the textbook formula); rotation:
+    T = 2∫₀^π dθ/θ̇(θ) by mpmath's quadrature of the energy equation in θ itself (30 digits)."""
+    with mpmath.workdps(40):  # the constants as exact as the recipe's own 40 digits
+        g0 = mpmath.mpf("9.81")
+        E0 = mpmath.mpf(thd0) ** 2 / 2 - g0 * mpmath.cos(th0)
+    o = oscillation(_pendulum(), {m: 1, g: g0, l: 1, E: E0}, th0)
+    with mpmath.workdps(30):
+        if kind == "libration":
+            ref = 4 * mpmath.ellipk(mpmath.sin(mpmath.acos(-E0 / g0) / 2) ** 2) / mpmath.sqrt(g0)
+        else:
+            ref = 2 * mpmath.quad(lambda x: 1 / mpmath.sqrt(2 * (E0 + g0 * mpmath.cos(x))), [0, mpmath.pi])
+    assert o.kind.startswith(kind)
+    assert abs(o.period - ref) <= mpmath.mpf(10) ** -25 * ref
+
+
+def test_spherical_pendulum_period_against_quadrature_in_theta():
+    """2∫ dθ/√F(θ) between the turning angles, F = 2(E + g cos θ) − p²/sin²θ (unit m, l), by mpmath.quad."""
+    found = find_substitution(reduce_to_quadrature(LagrangianModel(
+        m * l**2 * (th.diff(t) ** 2 + sp.sin(th) ** 2 * ph.diff(t) ** 2) / 2 + m * g * l * sp.cos(th), [th, ph])))
+    p = sp.Symbol("p_phi", real=True)
+    with mpmath.workdps(40):
+        th0, phd0, g0 = mpmath.mpf(0.8), mpmath.mpf(1.5), mpmath.mpf("9.81")  # the start in doubles, exactly
+        pv = mpmath.sin(th0) ** 2 * phd0
+        E0 = (mpmath.sin(th0) * phd0) ** 2 / 2 - g0 * mpmath.cos(th0)
+    o = oscillation(found, {m: 1, g: g0, l: 1, E: E0, p: pv}, float(th0))
+    assert o.kind == "oscillation between turning points" and o.folds == (False, False)
+    with mpmath.workdps(50):
+        lo, hi = sorted(mpmath.acos(x) for x in o.u_range)
+    ref = _period_by_quadrature(lambda x: 2 * (E0 + g0 * mpmath.cos(x)) - pv**2 / mpmath.sin(x) ** 2, lo, hi)
+    assert abs(o.period - ref) <= 1e-18 * ref
+
+
+def test_heavy_top_nutation_period_from_the_generic_recipe_equals_the_built_in_closed_form():
+    """The Lagrangian written out, reduced and solved generically, against exact_heavy_top (hand-built, 40 digits)."""
+    from mechderive import exact_heavy_top
+
+    L = I1 * (th.diff(t) ** 2 + sp.sin(th) ** 2 * ph.diff(t) ** 2) / 2 \
+        + I3 * (ps.diff(t) + sp.cos(th) * ph.diff(t)) ** 2 / 2 - M * g * l * sp.cos(th)
+    found = find_substitution(reduce_to_quadrature(LagrangianModel(L, [ph, th, ps])))
+    with mpmath.workdps(40):  # the start's doubles, exactly, and the constants (3.63)-(3.65) at 40 digits
+        i1, i3, mgl, th0, thd0, phd0, psd0 = (mpmath.mpf(x) for x in (1.0, 0.5, 0.981, 0.5, 0.3, 0.2, 20.0))
+        w3 = psd0 + phd0 * mpmath.cos(th0)
+        values = {I1: 1, I3: sp.Rational(1, 2), M: 1, g: mgl, l: 1,
+                  sp.Symbol("p_psi", real=True): i3 * w3,
+                  sp.Symbol("p_phi", real=True): i1 * mpmath.sin(th0) ** 2 * phd0 + i3 * mpmath.cos(th0) * w3,
+                  E: (i1 * (thd0**2 + (mpmath.sin(th0) * phd0) ** 2) + i3 * w3**2) / 2 + mgl * mpmath.cos(th0)}
+    o = oscillation(found, values, float(th0))
+    top = exact_heavy_top(dict(I1=1.0, I3=0.5, Mgl=0.981),
+                          dict(theta=0.5, phi=0.0, psi=0.0, theta_dot=0.3, phi_dot=0.2, psi_dot=20.0))
+    assert abs(float(o.period) - top.nutation_period) <= 1e-13 * top.nutation_period
+
+
+def test_anharmonic_oscillator_two_real_roots_and_a_complex_pair():
+    """ẋ² = 2E − x² − x⁴/2 (L = ½ẋ² − ½x² − x⁴/4): a quartic with two real roots; period by mpmath.quad."""
+    x = coordinate("x")
+    found = find_substitution(reduce_to_quadrature(LagrangianModel(x.diff(t) ** 2 / 2 - x**2 / 2 - x**4 / 4, [x])))
+    assert (found.name, found.degree) == ("u = q", 4)
+    with mpmath.workdps(40):
+        E0 = mpmath.mpf(7) / 10
+    o = oscillation(found, {E: E0}, 0.0)
+    assert abs(o.u_range[0] + o.u_range[1]) <= 1e-30  # symmetric about x = 0
+    ref = _period_by_quadrature(lambda v: 2 * E0 - v**2 - v**4 / 2, *o.u_range)
+    assert abs(o.period - ref) <= 1e-18 * o.period
+
+
+def test_a_quartic_well_with_four_real_roots():
+    """ẋ² = 2E − (x² − 1)² (a double well below its barrier, E < 1/2): motion in one well, between the middle
+    pair of roots of the well's side; period by mpmath.quad."""
+    x = coordinate("x")
+    found = find_substitution(reduce_to_quadrature(LagrangianModel(x.diff(t) ** 2 / 2 - (x**2 - 1) ** 2 / 2, [x])))
+    with mpmath.workdps(40):
+        E0 = mpmath.mpf(3) / 10
+    o = oscillation(found, {E: E0}, 1.0)
+    assert o.u_range[0] > 0  # the right-hand well
+    ref = _period_by_quadrature(lambda v: 2 * E0 - (v**2 - 1) ** 2, *o.u_range)
+    assert abs(o.period - ref) <= 1e-18 * o.period
+
+
+def test_motions_without_a_period_are_said_so():
+    """A free particle (ẋ² = 2E/m, no root: unbounded) and a pendulum at rest at the bottom (a double root)."""
+    x = coordinate("x")
+    free = find_substitution(reduce_to_quadrature(LagrangianModel(m * x.diff(t) ** 2 / 2 - k * x, [x])))
+    with pytest.raises(NoSubstitution, match="unbounded"):
+        oscillation(free, {m: 1, k: -1, E: 1}, 0.0)  # pushed away forever: V = −x
+    with pytest.raises(NoSubstitution, match="steady"):
+        oscillation(_pendulum(), {m: 1, g: 1, l: 1, E: -1}, 0.0)

@@ -38,8 +38,8 @@ import sympy as sp
 from ..errors import DerivationError
 from .lagrangian import LagrangianModel
 
-__all__ = ["Quadrature", "Substitution", "NoQuadrature", "NoSubstitution", "SUBSTITUTIONS",
-           "reduce_to_quadrature", "find_substitution", "MAX_DEGREE"]
+__all__ = ["Quadrature", "Substitution", "Oscillation", "NoQuadrature", "NoSubstitution", "SUBSTITUTIONS",
+           "reduce_to_quadrature", "find_substitution", "oscillation", "MAX_DEGREE"]
 
 #: the largest degree of u̇² = P(u) solved by elliptic functions
 MAX_DEGREE = 4
@@ -164,3 +164,122 @@ def find_substitution(quadrature: Quadrature) -> Substitution:
     beyond = f" (polynomials beyond quartic: {'; '.join(found)})" if found else ""
     raise NoSubstitution(f"expected a substitution making q̇² = F(q) a polynomial of degree ≤ {MAX_DEGREE} in u; "
                          f"none of {', '.join(n for n, _, _ in SUBSTITUTIONS)} does{beyond}: F = {F}")
+
+
+# --- one motion: turning points and period ----------------------------------------------------------
+
+@dataclass(frozen=True)
+class Oscillation:
+    """The motion of u = g(q) between two roots of P, and what it means for q.
+
+    ``u_range``: the roots (a, b) of P around u0 (the turning points of u); ``folds``: which of them are
+    where g'(q) = 0 (q passes through there: not a turning point of q); ``u_period``: the period of u(t);
+    ``period``: that of q — twice u's when one end is a fold (a libration through it), u's otherwise (a
+    rotation through both folds, or an oscillation between two true turning points); ``kind``.
+    Values are mpmath numbers at the working precision.
+    """
+
+    u_range: tuple
+    folds: tuple[bool, bool]
+    u_period: object
+    period: object
+    kind: str
+
+
+def _real_roots(coeffs: list) -> list:
+    import mpmath
+
+    roots = mpmath.polyroots(coeffs, maxsteps=400, extraprec=6 * mpmath.mp.dps)
+    tiny = mpmath.mpf(10) ** (-mpmath.mp.dps // 2)
+    return sorted(mpmath.re(r) for r in roots if abs(mpmath.im(r)) <= tiny * (1 + abs(r)))
+
+
+def _complete_integral(c: list, roots: list, a, b):
+    """∫_a^b du / √P(u) for P of degree 2, 3 or 4 with leading coefficient c[0], between adjacent real roots
+    a < b of P (P > 0 between): 2K(m)/√(...) with the modulus of the root configuration (Byrd & Friedman
+    235.00-236.00 for three real roots, 252.00-257.00 for four, 259.00 for two and a complex pair).
+    Checked in the tests against mpmath's quadrature of the same integral."""
+    import mpmath
+
+    deg = len(c) - 1
+    lead = c[0]
+    if deg == 2:
+        return mpmath.pi / mpmath.sqrt(-lead)
+    if deg == 3:
+        r1, r2, r3 = roots
+        if lead > 0:  # P > 0 on (r1, r2)
+            m = (r2 - r1) / (r3 - r1)
+        else:  # on (r2, r3)
+            m = (r3 - r2) / (r3 - r1)
+        return 2 * mpmath.ellipk(m) / mpmath.sqrt(abs(lead) * (r3 - r1))
+    if len(roots) == 2:  # two real roots b < a and a complex pair b1 ± i a1 (Byrd & Friedman 259.00)
+        import mpmath as mp
+
+        pair = [z for z in mp.polyroots(c, maxsteps=400, extraprec=6 * mp.mp.dps) if abs(mp.im(z)) > 0]
+        b1, a1 = mp.re(pair[0]), abs(mp.im(pair[0]))
+        A, B = mp.sqrt((b - b1) ** 2 + a1**2), mp.sqrt((a - b1) ** 2 + a1**2)
+        m = ((b - a) ** 2 - (A - B) ** 2) / (4 * A * B)
+        return 2 * mp.ellipk(m) / mp.sqrt(abs(lead) * A * B)
+    r1, r2, r3, r4 = roots
+    if (a, b) == (r2, r3):
+        m = (r3 - r2) * (r4 - r1) / ((r4 - r2) * (r3 - r1))
+    else:  # (r1, r2) or (r3, r4)
+        m = (r2 - r1) * (r4 - r3) / ((r3 - r1) * (r4 - r2))
+    return 2 * mpmath.ellipk(m) / mpmath.sqrt(abs(lead) * (r3 - r1) * (r4 - r2))
+
+
+def oscillation(substitution: Substitution, values: dict, q0: float, *, dps: int = 40) -> Oscillation:
+    """Turning points and period of the motion started at q = ``q0`` with the constants ``values``
+    ({symbol: number}: the parameters, E and the conserved momenta), from u̇² = P(u).
+
+    Raises :class:`NoSubstitution` for a motion that is not periodic: P < 0 at the start, no root of P on
+    one side of u0 (unbounded), u0 on a double root (steady, or a separatrix) — saying which.
+    """
+    import mpmath
+
+    with mpmath.workdps(dps):
+        coeffs = [mpmath.mpf(sp.N(c.subs(values), dps + 10)) for c in substitution.polynomial.all_coeffs()]
+        q = sp.Symbol("q")
+        g = substitution.u_of_q.subs({s: q for s in substitution.u_of_q.free_symbols})
+        u0 = mpmath.mpf(sp.N(g.subs(q, q0), dps + 10))
+        P = lambda x: mpmath.polyval(coeffs, x)  # noqa: E731
+        roots = _real_roots(coeffs)
+        # the intervals between consecutive real roots where P > 0; the motion is the one holding u0, within the
+        # rounding of constants given as doubles (a start at a turning point puts u0 on a root, to ~1e-16)
+        slack = mpmath.mpf(2) ** -40 * (1 + abs(u0))
+        ends = [-mpmath.inf, *roots, mpmath.inf]
+        positive = []
+        for lo, hi in zip(ends[:-1], ends[1:]):
+            mid = (lo + hi) / 2 if mpmath.isfinite(lo) and mpmath.isfinite(hi) else \
+                (hi - 1 if mpmath.isfinite(hi) else lo + 1 if mpmath.isfinite(lo) else mpmath.mpf(0))
+            if P(mid) > 0 and lo - slack <= u0 <= hi + slack:
+                positive.append((lo, hi))
+        if not positive:
+            if any(abs(r - u0) <= slack for r in roots):  # P ≤ 0 on both sides of its root u0: an equilibrium
+                raise NoSubstitution(f"expected two distinct turning points, got the start on a double root of P at "
+                                     f"u = {mpmath.nstr(u0, 8)}: a steady motion (no period)")
+            raise NoSubstitution(f"expected u̇² = P(u0) ≥ 0 at the start, got {mpmath.nstr(P(u0), 5)}: the constants "
+                                 f"do not belong to this start")
+        if len(positive) > 1:
+            raise NoSubstitution(f"expected the start inside one interval of motion, got it on a double root of P at u = "
+                                 f"{mpmath.nstr(u0, 8)}: a steady motion or a separatrix (no period)")
+        a, b = positive[0]
+        if not (mpmath.isfinite(a) and mpmath.isfinite(b)):
+            raise NoSubstitution(f"expected a bounded motion, got P(u) > 0 for all u {'<' if not mpmath.isfinite(a) else '>'} "
+                                 f"u0 = {mpmath.nstr(u0, 8)} (roots {[mpmath.nstr(r, 8) for r in roots]}): unbounded")
+        dg = sp.diff(g, q)
+        inverse = dict((n, inv) for n, _, inv in SUBSTITUTIONS)[substitution.name]
+
+        def fold(r) -> bool:
+            qr = sp.N(inverse(sp.Float(mpmath.nstr(r, dps + 5), dps)), dps)
+            return bool(abs(complex(sp.N(dg.subs(q, qr), dps))) <= 10.0 ** (-dps // 3))
+
+        folds = (fold(a), fold(b))
+        u_period = 2 * _complete_integral(coeffs, roots, a, b)
+        if sum(folds) == 1:
+            period, kind = 2 * u_period, "libration through a fold of the substitution"
+        elif sum(folds) == 2:
+            period, kind = u_period, "rotation"
+        else:
+            period, kind = u_period, "oscillation between turning points"
+        return Oscillation((a, b), folds, u_period, period, kind)
