@@ -260,7 +260,7 @@ def test_a_dask_worker_killed_mid_sweep_loses_no_points(tmp_path):
 
     sw = sweep_of(grid=SMALL, summary=["theta_min", "steady"], chunk=2)
     whole = run_sweep(sw, tmp_path / "whole.npz", workers=1).table
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster:
         pids = [nanny.process.pid for nanny in cluster.workers.values()]
         killed = []
 

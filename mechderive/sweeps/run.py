@@ -110,7 +110,7 @@ def _dask(source: str, name: str, todo: list[int], address: str, on_chunk: Calla
         if n < 1:
             raise InvalidInputError(f"sweep --dask: expected local:N with N >= 1 workers, or a scheduler "
                                     f"address (tcp://host:8786), got {address!r}")
-        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None)
+        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0")
         client = Client(cluster)
     else:
         try:

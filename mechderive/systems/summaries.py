@@ -1,6 +1,7 @@
 """Per-motion quantities every system can offer: the period of a periodic motion and the invariants' values.
 
-A system without a closed form measures both on its solution: the period by
+A system without a closed form measures both on its solution (a ``lagrangian`` system that reduces to
+u̇² = P(u) takes the period from :func:`mechderive.core.quadrature.oscillation` instead): the period by
 :func:`mechderive.core.periodic.measure_period` on the reduced state (the coordinates that are not
 cyclic, and the velocities), the invariants as their value at t = 0 with, as estimate, their largest
 deviation along the run (the system's own :meth:`~mechderive.systems.base.System.drift`, which already
@@ -15,10 +16,14 @@ import numpy as np
 
 from .base import Quantity
 
-__all__ = ["PERIOD", "invariant_quantities", "period_of", "invariants_of"]
+__all__ = ["PERIOD", "REDUCED_PERIOD", "invariant_quantities", "period_of", "invariants_of"]
 
 PERIOD = Quantity("period", "s", "period of the reduced motion (the non-cyclic coordinates and the velocities), "
                   "measured on the solution; none if it does not return within the run", "time")
+#: the period of a system given by its Lagrangian, which may reduce to a quadrature (:mod:`mechderive.core.quadrature`)
+REDUCED_PERIOD = Quantity("period", "s", "period of the reduced motion (the non-cyclic coordinates and the "
+                          "velocities): in closed form where L reduces to u̇² = P(u), P of degree ≤ 4, else measured "
+                          "on the solution; none if it does not return within the run", "time")
 
 
 def invariant_quantities(described: Mapping[str, tuple[str, str, str]]) -> tuple[Quantity, ...]:

@@ -99,9 +99,9 @@ class LagrangianSystem(System):
             + tuple(Quantity(f"p_{q}", "", f"momentum ∂L/∂{q}_dot of the cyclic coordinate {q} (conserved)")
                     for q in eq.cyclic)
             + tuple(Quantity(n, "", f"output expression {n}") for n, _ in d.expressions))
-        from ..summaries import PERIOD, invariant_quantities
+        from ..summaries import REDUCED_PERIOD, invariant_quantities
 
-        self.summaries = (PERIOD,) + invariant_quantities(
+        self.summaries = (REDUCED_PERIOD,) + invariant_quantities(
             {n: ("", "Jacobi integral h" if n == "energy" else f"momentum of the cyclic coordinate {n[2:]}", "")
              for n in eq.conserved_names})
 
@@ -322,8 +322,9 @@ class LagrangianSystem(System):
 
     def summarize(self, scene: "Scene", solved: Solved, t: "np.ndarray",
                   names: tuple[str, ...]) -> dict[str, tuple[Any, Any]]:
-        """``period`` of the reduced motion (non-cyclic q and every q̇), measured on the trajectory; the
-        conserved quantities' values (:mod:`..summaries`)."""
+        """``period`` of the reduced motion (non-cyclic q and every q̇): in closed form where L reduces to
+        u̇² = P(u) with P of degree ≤ 4 (:mod:`mechderive.core.quadrature`), else measured on the trajectory;
+        the conserved quantities' values (:mod:`..summaries`)."""
         import numpy as np
 
         from ..summaries import invariants_of, period_of
@@ -338,8 +339,59 @@ class LagrangianSystem(System):
             if self.definition.uses_time:
                 out["period"] = (None, "the Lagrangian depends on t: the motion need not repeat")
             else:
-                out["period"] = period_of(np.asarray(traj.t), np.asarray(traj.y)[:, columns], errors)
+                closed = self._closed_period(scene, solved, t)
+                out["period"] = closed if closed is not None else \
+                    period_of(np.asarray(traj.t), np.asarray(traj.y)[:, columns], errors)
         return {name: out[name] for name in names}
+
+    def _substitution(self) -> Any:
+        """The reduction to u̇² = P(u) (:mod:`mechderive.core.quadrature`), or None where there is none (cached)."""
+        if "_found" not in self.__dict__:
+            from ...core.quadrature import NoQuadrature, NoSubstitution, find_substitution, reduce_to_quadrature
+
+            try:
+                self.__dict__["_found"] = find_substitution(reduce_to_quadrature(self.equations.lagrangian_model))
+            except (NoQuadrature, NoSubstitution):
+                self.__dict__["_found"] = None
+        return self.__dict__["_found"]
+
+    def _closed_period(self, scene: "Scene", solved: Solved, t: "np.ndarray") -> tuple[Any, Any] | None:
+        """(period, estimate) from the elliptic reduction where the system has one, else None (measured instead).
+
+        The constants E and p_c are the run's own values at t = 0, evaluated from the start's doubles; the
+        estimate is how far the period moves when E does by that evaluation's rounding (8ε × the size of E's
+        terms), on top of the closed form's 40-digit evaluation.  A motion the recipe finds not periodic
+        gives its reason.
+        """
+        found = self._substitution()
+        if found is None:
+            return None
+        from ...core.quadrature import NoSubstitution, oscillation
+
+        drifts = self.drift(scene, solved, t)
+        d = self.definition
+        values: dict = {}
+        for sym in found.polynomial.free_symbols - {found.variable}:
+            if sym.name == "E":
+                values[sym] = drifts["energy"].start
+            elif sym.name in drifts:
+                values[sym] = drifts[sym.name].start
+            elif sym.name in scene.parameters:
+                values[sym] = scene.parameters[sym.name]
+            else:
+                return None
+        coordinate = d.coordinates[self.equations.lagrangian_model.coordinates.index(
+            next(q for q in self.equations.lagrangian_model.remaining_coordinates))]
+        q0 = float(scene.initial[coordinate])
+        energy = next(s for s in values if s.name == "E")
+        try:
+            base = oscillation(found, values, q0)
+            # E at t = 0 from the doubles of the start: its rounding, ~ε × the size of its terms
+            shift = 8 * 2.0**-52 * max(float(drifts["energy"].scale), abs(float(values[energy])))
+            moved = oscillation(found, {**values, energy: values[energy] + shift}, q0)
+        except NoSubstitution as exc:
+            return None, f"{exc} ({found.name})"
+        return float(base.period), float(abs(moved.period - base.period)) + 2.0**-52 * float(base.period)
 
     def drift(self, scene: "Scene", solved: Solved, t: "np.ndarray") -> dict[str, "Drift"]:
         """Energy (when ∂L/∂t = 0) and each p_c, each against the largest sum of the sizes of its terms."""
