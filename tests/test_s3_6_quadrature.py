@@ -219,3 +219,27 @@ def test_a_lagrangian_scenes_period_comes_from_the_closed_form(theta0, theta_dot
         else:
             ref = 2 * mpmath.quad(lambda x: 1 / mpmath.sqrt(2 * (E0 + g0 * mpmath.cos(x))), [0, mpmath.pi])
     assert abs(value - float(ref)) <= max(estimate, 2e-16 * value) <= 1e-14 * value
+
+
+def test_derive_closed_form_prints_the_reduction_or_why_not(tmp_path, capsys):
+    """`mechderive derive SCENE closed_form`: (d cos θ/dt)² = P(cos θ) for the spherical pendulum (the cubic of the
+    test above, printed in θ(t)); the double pendulum refused with the reason, exit status 2."""
+    from mechderive.cli import main
+
+    scene = tmp_path / "spherical.toml"
+    scene.write_text('system = "lagrangian"\ncoordinates = ["theta", "phi"]\n'
+                     'lagrangian = "m*l**2/2*(theta_dot**2 + sin(theta)**2*phi_dot**2) + m*g*l*cos(theta)"\n'
+                     "[parameters]\nm = 1.0\nl = 1.0\ng = 9.81\n"
+                     "[initial]\ntheta = 1.0\nphi = 0.0\ntheta_dot = 0.0\nphi_dot = 1.0\n"
+                     '[time]\nt_end = 1.0\nsamples = 11\n[output]\nquantities = ["theta"]\n', encoding="utf-8")
+    assert main(["derive", str(scene), "closed_form", "--format", "latex"]) == 0
+    out = capsys.readouterr().out
+    assert r"\left(\frac{d}{d t} \cos{\left(\theta{\left(t \right)} \right)}\right)^{2} =" in out
+    assert r"\cos^{3}{\left(\theta{\left(t \right)} \right)}" in out  # the cubic
+    double = tmp_path / "double.toml"
+    double.write_text('system = "lagrangian"\ncoordinates = ["a1", "a2"]\n'
+                      'lagrangian = "a1_dot**2 + a2_dot**2/2 + a1_dot*a2_dot*cos(a1 - a2) + 2*cos(a1) + cos(a2)"\n'
+                      "[initial]\na1 = 1.0\na2 = 0.0\na1_dot = 0.0\na2_dot = 0.0\n"
+                      '[time]\nt_end = 1.0\nsamples = 11\n[output]\nquantities = ["a1"]\n', encoding="utf-8")
+    assert main(["derive", str(double), "closed_form"]) == 2
+    assert "one coordinate left" in capsys.readouterr().err

@@ -435,7 +435,25 @@ class LagrangianSystem(System):
             Derivation("energy", "h = Σ q̇ ∂L/∂q̇ − L (conserved when ∂L/∂t = 0)", "(3.65) for the heavy top",
                        lambda _: eq.energy),
             Derivation("conserved_momenta", "p_c of the cyclic coordinates (∂L/∂q_c ≡ 0)", "", conserved),
+            Derivation("closed_form", "the reduction by the cyclic coordinates to u̇² = P(u), P a polynomial of degree "
+                       "≤ 4 in the substitution u = g(q) found (elliptic functions solve it)", "(3.73) for the heavy top",
+                       lambda _: self._reduction()[1], lhs=lambda: self._reduction()[0]),
         )
+
+    def _reduction(self) -> Any:
+        """((d g(q)/dt)², P(g(q))): the substitution found and its polynomial, printed as one equation; raises the
+        reason where there is none (:mod:`mechderive.core.quadrature`)."""
+        import sympy as sp
+
+        from ...core.quadrature import find_substitution, reduce_to_quadrature
+        from ...core.symbols import t as time
+
+        model = self.equations.lagrangian_model
+        found = find_substitution(reduce_to_quadrature(model))
+        q = model.remaining_coordinates[0]  # q(t)
+        g = found.u_of_q.subs({s: q for s in found.u_of_q.free_symbols})
+        return sp.Derivative(g, time, evaluate=False) ** 2, found.polynomial.as_expr().subs(found.variable, g)
+
 
     def check_system(self) -> Any:
         """The symbols of ``mechderive check``: q, q_dot (state), q_ddot, the parameters, energy, p_<q>, Lagrangian."""
