@@ -243,3 +243,13 @@ def test_derive_closed_form_prints_the_reduction_or_why_not(tmp_path, capsys):
                       '[time]\nt_end = 1.0\nsamples = 11\n[output]\nquantities = ["a1"]\n', encoding="utf-8")
     assert main(["derive", str(double), "closed_form"]) == 2
     assert "one coordinate left" in capsys.readouterr().err
+
+
+def test_the_closed_form_period_is_cross_checked_against_the_measured_one():
+    """Agreeing within their estimates: the closed form's; disagreeing: the measured period, its estimate the
+    disagreement (the recipe's assumptions did not hold), never the closed form with its small estimate."""
+    from mechderive.systems.lagrangian.system import _checked
+
+    assert _checked((2.0, 1e-15), (2.0 + 1e-10, 1e-9)) == (2.0, 1e-15)
+    assert _checked((2.0, 1e-15), (3.0, 1e-9)) == (3.0, 1.0)
+    assert _checked((2.0, 1e-15), (None, "not periodic within the run")) == (2.0, 1e-15)

@@ -340,8 +340,8 @@ class LagrangianSystem(System):
                 out["period"] = (None, "the Lagrangian depends on t: the motion need not repeat")
             else:
                 closed = self._closed_period(scene, solved, t)
-                out["period"] = closed if closed is not None else \
-                    period_of(np.asarray(traj.t), np.asarray(traj.y)[:, columns], errors)
+                measured = period_of(np.asarray(traj.t), np.asarray(traj.y)[:, columns], errors)
+                out["period"] = measured if closed is None else _checked(closed, measured)
         return {name: out[name] for name in names}
 
     def _substitution(self) -> Any:
@@ -559,6 +559,19 @@ class LagrangianFamily(System):
 
 
 SYSTEM = LagrangianFamily()
+
+
+def _checked(closed: tuple[Any, Any], measured: tuple[Any, Any]) -> tuple[Any, Any]:
+    """The closed form's (period, estimate), cross-checked against the period measured on the trajectory where
+    the run shows one: if they disagree by more than ten times their estimates together, the recipe's
+    assumptions did not hold for this motion — the measured period is given instead, its estimate the
+    disagreement (never a wrong number with a small estimate)."""
+    (value, estimate), (seen, seen_estimate) = closed, measured
+    if value is None or seen is None or not isinstance(seen_estimate, (int, float)):
+        return closed
+    if abs(value - seen) <= 10 * (estimate + seen_estimate):
+        return closed
+    return seen, abs(value - seen)
 
 
 def from_lagrangian(lagrangian: Any, coordinates: Sequence[Any], parameters: Sequence[Any] = (),
