@@ -253,3 +253,18 @@ def test_the_closed_form_period_is_cross_checked_against_the_measured_one():
     assert _checked((2.0, 1e-15), (2.0 + 1e-10, 1e-9)) == (2.0, 1e-15)
     assert _checked((2.0, 1e-15), (3.0, 1e-9)) == (3.0, 1.0)
     assert _checked((2.0, 1e-15), (None, "not periodic within the run")) == (2.0, 1e-15)
+
+
+def test_the_generic_reduction_equals_the_built_in_heavy_tops_f_of_u_symbolically():
+    """Issue 16: the heavy top's hand-built derivation (systems/heavy_top/model.py, f(u) in a, b, α, β) and the
+    generic recipe on its Lagrangian give the same polynomial, identically, once a = p_ψ/I1, b = p_φ/I1,
+    α = 2(E − p_ψ²/(2 I3))/I1, β = 2Mgl/I1 (3.66), (3.72)."""
+    from mechderive.systems.heavy_top import model as hm
+
+    L = I1 * (th.diff(t) ** 2 + sp.sin(th) ** 2 * ph.diff(t) ** 2) / 2 \
+        + I3 * (ps.diff(t) + sp.cos(th) * ph.diff(t)) ** 2 / 2 - M * g * l * sp.cos(th)
+    found = _found(L, [ph, th, ps])
+    p_phi, p_psi = sp.Symbol("p_phi", real=True), sp.Symbol("p_psi", real=True)
+    built_in = hm.model().f_u.subs({hm.a: p_psi / I1, hm.b: p_phi / I1, hm.alpha: 2 * (E - p_psi**2 / (2 * I3)) / I1,
+                                    hm.beta: 2 * M * g * l / I1, hm.u: found.variable})
+    assert sp.expand(found.polynomial.as_expr() - built_in) == 0
