@@ -163,15 +163,20 @@ def test_heavy_top_nutation_period_from_the_generic_recipe_equals_the_built_in_c
 
 
 def test_anharmonic_oscillator_two_real_roots_and_a_complex_pair():
-    """ẋ² = 2E − x² − x⁴/2 (L = ½ẋ² − ½x² − x⁴/4): a quartic with two real roots; period by mpmath.quad."""
+    """ẋ² = 2E − x² − x⁴/2 (L = ½ẋ² − ½x² − x⁴/4): a quartic in x with two real roots and a complex pair, a
+    cubic in x²; the period by mpmath's quadrature in x."""
     x = coordinate("x")
     found = find_substitution(reduce_to_quadrature(LagrangianModel(x.diff(t) ** 2 / 2 - x**2 / 2 - x**4 / 4, [x])))
-    assert (found.name, found.degree) == ("u = q", 4)
+    # u = x² makes it a cubic (lower than x's quartic); x passes through the fold x = 0 of u = x²
+    assert (found.name, found.degree) == ("u = q²", 3)
     with mpmath.workdps(40):
         E0 = mpmath.mpf(7) / 10
     o = oscillation(found, {E: E0}, 0.0)
-    assert abs(o.u_range[0] + o.u_range[1]) <= 1e-30  # symmetric about x = 0
-    ref = _period_by_quadrature(lambda v: 2 * E0 - v**2 - v**4 / 2, *o.u_range)
+    assert o.folds == (True, False) and o.kind.startswith("libration")
+    with mpmath.workdps(50):  # the turning points in x, at the roots' precision (−amp too: mpmath rounds it)
+        amp = mpmath.sqrt(o.u_range[1])
+        ends = (-amp, amp)
+    ref = _period_by_quadrature(lambda v: 2 * E0 - v**2 - v**4 / 2, *ends)
     assert abs(o.period - ref) <= 1e-18 * o.period
 
 
@@ -183,8 +188,10 @@ def test_a_quartic_well_with_four_real_roots():
     with mpmath.workdps(40):
         E0 = mpmath.mpf(3) / 10
     o = oscillation(found, {E: E0}, 1.0)
-    assert o.u_range[0] > 0  # the right-hand well
-    ref = _period_by_quadrature(lambda v: 2 * E0 - (v**2 - 1) ** 2, *o.u_range)
+    assert found.name == "u = q²" and o.u_range[0] > 0 and o.folds == (False, False)  # the right-hand well
+    with mpmath.workdps(50):
+        ends = [mpmath.sqrt(x) for x in o.u_range]  # the turning points in x, at the roots' precision
+    ref = _period_by_quadrature(lambda v: 2 * E0 - (v**2 - 1) ** 2, *ends)
     assert abs(o.period - ref) <= 1e-18 * o.period
 
 
@@ -268,3 +275,23 @@ def test_the_generic_reduction_equals_the_built_in_heavy_tops_f_of_u_symbolicall
     built_in = hm.model().f_u.subs({hm.a: p_psi / I1, hm.b: p_phi / I1, hm.alpha: 2 * (E - p_psi**2 / (2 * I3)) / I1,
                                     hm.beta: 2 * M * g * l / I1, hm.u: found.variable})
     assert sp.expand(found.polynomial.as_expr() - built_in) == 0
+
+
+def test_kepler_orbits_along_phi_are_quadratics_in_one_over_r_and_close():
+    """Binet: (du/dφ)² = 2mE/p² + 2mk u/p² − u² with u = 1/r (a quadratic, by hand): the orbit's period in φ is
+    2π — it closes; with an extra attraction β/r² it is 2π/√(1 − 2mβ/p²) — the orbit precesses (both by hand)."""
+    kepler = m * (r.diff(t) ** 2 + r**2 * ph.diff(t) ** 2) / 2 + k / r
+    found = find_substitution(reduce_to_quadrature(LagrangianModel(kepler, [r, ph]), along="phi"))
+    p = sp.Symbol("p_phi", real=True)
+    u = found.variable
+    assert (found.name, found.degree, found.independent) == ("u = 1/q", 2, "phi")
+    assert sp.expand(found.polynomial.as_expr() - (2 * m * E / p**2 + 2 * m * k * u / p**2 - u**2)) == 0
+    with mpmath.workdps(40):
+        values = {m: 1, k: 1, p: 1, E: mpmath.mpf(-3) / 10}  # bound: E < 0
+        assert abs(oscillation(found, values, 1.0).period - 2 * mpmath.pi) <= 1e-30
+        beta = sp.Symbol("beta", positive=True)
+        extra = find_substitution(reduce_to_quadrature(LagrangianModel(kepler + beta / r**2, [r, ph]), along="phi"))
+        o = oscillation(extra, {**values, beta: mpmath.mpf(1) / 10}, 1.0)
+        assert abs(o.period - 2 * mpmath.pi / mpmath.sqrt(1 - mpmath.mpf(2) / 10)) <= 1e-30
+    with pytest.raises(NoQuadrature, match="cyclic coordinate to measure the orbit along"):
+        reduce_to_quadrature(LagrangianModel(kepler, [r, ph]), along="r")

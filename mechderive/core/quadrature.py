@@ -6,7 +6,7 @@ The first step of finding a closed form (issue 16), for any :class:`~.lagrangian
    coordinate q remains, the Routhian's energy ½ M(q) q̇² + V_eff(q) = E is conserved (its part linear
    in q̇ does not enter the energy), so q̇² = F(q) = 2 (E − V_eff(q)) / M(q): a quadrature.
 2. Search a small family of substitutions u = g(q) (:data:`SUBSTITUTIONS`) for one that makes
-   u̇² = g'(q)² F(q) a polynomial in u of degree ≤ 4 — then u(t) is an elliptic function of t (degree
+   u̇² = g'(q)² F(q) a polynomial in u of degree ≤ 4 (the lowest found) — then u(t) is an elliptic function of t (degree
    3 and 4: Jacobi's; ≤ 2: trigonometric or hyperbolic).  For each candidate q is written as the
    inverse g⁻¹(u), the result brought to a normal form (cancel; sin, cos of acos u as √(1 − u²) ...) and
    accepted only if it is a polynomial in u whose coefficients are free of u.
@@ -63,6 +63,8 @@ class Quadrature:
     energy: sp.Symbol
     F: sp.Expr
     momenta: tuple[sp.Symbol, ...]
+    #: the independent variable: "t", or the name of the cyclic coordinate the orbit is measured along
+    independent: str = "t"
 
 
 @dataclass(frozen=True)
@@ -74,13 +76,14 @@ class Substitution:
     polynomial: sp.Poly
     degree: int
     variable: sp.Symbol
+    independent: str = "t"
 
 
 def _u() -> sp.Symbol:
     return sp.Symbol("u", real=True)
 
 
-#: (name, g(q), g⁻¹(u)) tried in this order: the first that gives a polynomial of degree ≤ 4 wins
+#: (name, g(q), g⁻¹(u)) tried in this order: the lowest degree ≤ 4 wins, the first of equals
 SUBSTITUTIONS: tuple[tuple[str, Callable[[sp.Expr], sp.Expr], Callable[[sp.Expr], sp.Expr]], ...] = (
     ("u = q", lambda q: q, lambda u: u),
     ("u = cos q", sp.cos, sp.acos),
@@ -93,8 +96,10 @@ SUBSTITUTIONS: tuple[tuple[str, Callable[[sp.Expr], sp.Expr], Callable[[sp.Expr]
 )
 
 
-def reduce_to_quadrature(model: LagrangianModel) -> Quadrature:
-    """q̇² = F(q) of ``model`` reduced by its cyclic coordinates (see the module's docstring)."""
+def reduce_to_quadrature(model: LagrangianModel, along: str | None = None) -> Quadrature:
+    """q̇² = F(q) of ``model`` reduced by its cyclic coordinates (see the module's docstring); with ``along`` (the
+    name of a cyclic coordinate c) the orbit equation (dq/dc)² = F(q)/ċ(q)² instead — Binet's for a central force,
+    where u = 1/r makes it a quadratic while in t it is not a quartic."""
     if model.state_lagrangian.has(sp.Symbol("t")) or any(s.name == "t" for s in model.state_lagrangian.free_symbols):
         raise NoQuadrature("expected a Lagrangian without explicit time: the energy is not conserved")
     if model.cyclic_coordinates:
@@ -123,7 +128,18 @@ def reduce_to_quadrature(model: LagrangianModel) -> Quadrature:
         raise NoQuadrature(f"expected a kinetic term in {qd}, got none: {reduced}")
     E = sp.Symbol("E", real=True)
     F = sp.factor(sp.together(2 * (E - potential) / mass))
-    return Quadrature(q, mass, potential, E, F, momenta)
+    if along is None:
+        return Quadrature(q, mass, potential, E, F, momenta)
+    # the orbit q(c) along a cyclic coordinate c: (dq/dc)² = q̇² / ċ², ċ from p_c (a function of q alone, or no
+    # orbit equation of this kind: ċ would depend on q̇ too)
+    found = [c for c in model.cyclic_coordinates if c.func.__name__ == along]
+    if not found:
+        raise NoQuadrature(f"expected a cyclic coordinate to measure the orbit along, got {along!r} (cyclic: "
+                           f"{', '.join(c.func.__name__ for c in model.cyclic_coordinates) or 'none'})")
+    rate = model.cyclic_velocities[model.velocities[model.coordinates.index(found[0])]]
+    if rate.has(qd):
+        raise NoQuadrature(f"expected d{along}/dt a function of {q} alone, got {rate}")
+    return Quadrature(q, mass, potential, E, sp.factor(sp.together(F / rate**2)), momenta, along)
 
 
 def _as_polynomial(expr: sp.Expr, u: sp.Symbol) -> sp.Poly | None:
@@ -147,11 +163,12 @@ def _as_polynomial(expr: sp.Expr, u: sp.Symbol) -> sp.Poly | None:
 
 
 def find_substitution(quadrature: Quadrature) -> Substitution:
-    """The first u = g(q) of :data:`SUBSTITUTIONS` with u̇² = P(u) a polynomial of degree ≤ 4; raises
-    :class:`NoSubstitution` naming the degrees found (a polynomial beyond quartic) and F otherwise."""
+    """The u = g(q) of :data:`SUBSTITUTIONS` with u̇² = P(u) a polynomial of the lowest degree ≤ 4 (the first
+    of equals); raises :class:`NoSubstitution` naming the degrees found (beyond quartic) and F otherwise."""
     q, F = quadrature.coordinate, quadrature.F
     u = _u()
     found: list[str] = []
+    best: Substitution | None = None
     for name, g, inverse in SUBSTITUTIONS:
         u_dot_sq = g(q).diff(q) ** 2 * F
         in_u = u_dot_sq.subs(q, inverse(u))
@@ -159,8 +176,15 @@ def find_substitution(quadrature: Quadrature) -> Substitution:
         if p is None:
             continue
         if p.degree() <= MAX_DEGREE:
-            return Substitution(name, g(q), p, p.degree(), u)
+            # the lowest degree wins (Binet's orbit: r gives a quartic, 1/r a quadratic); ≤ 2 cannot be beaten
+            if best is None or p.degree() < best.degree:
+                best = Substitution(name, g(q), p, p.degree(), u, quadrature.independent)
+            if best.degree <= 2:
+                break
+            continue
         found.append(f"{name}: degree {p.degree()}")
+    if best is not None:
+        return best
     beyond = f" (polynomials beyond quartic: {'; '.join(found)})" if found else ""
     raise NoSubstitution(f"expected a substitution making q̇² = F(q) a polynomial of degree ≤ {MAX_DEGREE} in u; "
                          f"none of {', '.join(n for n, _, _ in SUBSTITUTIONS)} does{beyond}: F = {F}")
