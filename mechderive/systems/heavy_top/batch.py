@@ -228,15 +228,14 @@ def _roots(c: list[np.ndarray], lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndar
 
 
 def _agm_k(m1: np.ndarray) -> np.ndarray:
-    """K(m) = π / (2 AGM(1, √(1 − m))) (DLMF 19.8.5): the second, independent evaluation of K."""
-    dtype = m1.dtype.type
-    a, b = np.ones_like(m1), np.sqrt(m1)
-    eps = np.finfo(dtype).eps
-    for _ in range(64):
-        a, b = (a + b) / 2, np.sqrt(a * b)
-        if np.all(np.abs(a - b) <= 4 * eps * a):
-            break
-    return (4 * np.arctan(dtype(1)) / 2) / ((a + b) / 2)
+    """K(m) by the arithmetic-geometric mean in double-double (:func:`mechderive.special._parameter.quarter_period`,
+    DLMF 19.8.5), from 1 − m split into two doubles: the second, independent evaluation of K, in ``m1``'s dtype."""
+    from ...special._parameter import quarter_period
+
+    hi = m1.astype(float)
+    lo = (m1 - hi.astype(m1.dtype)).astype(float)
+    K_hi, K_lo = quarter_period(hi, lo)
+    return K_hi.astype(m1.dtype) + K_lo.astype(m1.dtype)
 
 
 def _pipeline(F: dict, P: list, a: np.ndarray, beta: np.ndarray, shift: list[np.ndarray], w: np.ndarray,

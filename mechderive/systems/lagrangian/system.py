@@ -166,7 +166,6 @@ class LagrangianSystem(System):
 
     def check_initial(self, given: Mapping[str, Any], parameters: Mapping[str, Any]) -> dict[str, Any]:
         """Every q and q_dot, finite; the mass matrix regular at that state (else the keys it depends on)."""
-        d = self.definition
         keys = [k.name for k in self.initial]
         for key in given:
             if key not in keys:
@@ -329,8 +328,8 @@ class LagrangianSystem(System):
 
         from ..summaries import invariants_of, period_of
 
-        out = invariants_of(self.drift(scene, solved, t), tuple(n for n in names if n != "period"),
-                            "the Lagrangian depends on t")
+        drifts = self.drift(scene, solved, t)
+        out = invariants_of(drifts, tuple(n for n in names if n != "period"), "the Lagrangian depends on t")
         if "period" in names:
             traj, n = solved.solution, len(self.definition.coordinates)
             keep = [i for i, q in enumerate(self.definition.coordinates) if q not in self.equations.cyclic]
@@ -339,7 +338,7 @@ class LagrangianSystem(System):
             if self.definition.uses_time:
                 out["period"] = (None, "the Lagrangian depends on t: the motion need not repeat")
             else:
-                closed = self._closed_period(scene, solved, t)
+                closed = self._closed_period(scene, drifts)
                 measured = period_of(np.asarray(traj.t), np.asarray(traj.y)[:, columns], errors)
                 out["period"] = measured if closed is None else _checked(closed, measured)
         return {name: out[name] for name in names}
@@ -355,7 +354,7 @@ class LagrangianSystem(System):
                 self.__dict__["_found"] = None
         return self.__dict__["_found"]
 
-    def _closed_period(self, scene: "Scene", solved: Solved, t: "np.ndarray") -> tuple[Any, Any] | None:
+    def _closed_period(self, scene: "Scene", drifts: dict) -> tuple[Any, Any] | None:
         """(period, estimate) from the elliptic reduction where the system has one, else None (measured instead).
 
         The constants E and p_c are the run's own values at t = 0, evaluated from the start's doubles; the
@@ -368,7 +367,6 @@ class LagrangianSystem(System):
             return None
         from ...core.quadrature import NoSubstitution, oscillation
 
-        drifts = self.drift(scene, solved, t)
         d = self.definition
         values: dict = {}
         for sym in found.polynomial.free_symbols - {found.variable}:
@@ -383,7 +381,9 @@ class LagrangianSystem(System):
         coordinate = d.coordinates[self.equations.lagrangian_model.coordinates.index(
             next(q for q in self.equations.lagrangian_model.remaining_coordinates))]
         q0 = float(scene.initial[coordinate])
-        energy = next(s for s in values if s.name == "E")
+        energy = next((s for s in values if s.name == "E"), None)
+        if energy is None:
+            return None
         try:
             base = oscillation(found, values, q0)
             # E at t = 0 from the doubles of the start: its rounding, ~ε × the size of its terms
