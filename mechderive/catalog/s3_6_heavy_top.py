@@ -207,12 +207,27 @@ register(Claim(
 ))
 
 
+def _generic_f(m) -> sp.Expr:
+    """f(u) found by the generic recipe (:mod:`mechderive.core.quadrature`: Routh reduction, then the substitution
+    that makes q̇² a polynomial) on the model's own Lagrangian, in a, b, α, β by (3.66), (3.72), E' = E − p_ψ²/(2I3)."""
+    from ..core.quadrature import find_substitution, reduce_to_quadrature
+
+    found = find_substitution(reduce_to_quadrature(m))
+    if found.name != "u = cos q":
+        return sp.nan
+    sym = {x.name: x for x in found.polynomial.free_symbols}
+    p_phi, p_psi, E = sym["p_phi"], sym["p_psi"], sym["E"]
+    in_ab = {p_phi: I1 * b, p_psi: I1 * a, E: I1 * alpha / 2 + I1**2 * a**2 / (2 * I3), M: beta * I1 / (2 * g * l)}
+    return found.polynomial.as_expr().subs(in_ab).subs(found.variable, u)
+
+
 def _check_3_73(f) -> Outcome:
     m = _m()
     at_state = f.subs(m.constants_from_state).subs(u, c(theta))
     return all_pass([
         same(f, m.f_u, "f(u) vs u̇² from (3.69)"),
         same(at_state, m.u_dot_squared, "f(cos θ) at a, b, α, β of the state vs (d cos θ/dt)²"),
+        same(f, _generic_f(m), "f(u) vs the generic reduction of L with u = cos θ (core.quadrature)"),
     ])
 
 

@@ -6,7 +6,7 @@ The first step of finding a closed form (issue 16), for any :class:`~.lagrangian
    coordinate q remains, the Routhian's energy ½ M(q) q̇² + V_eff(q) = E is conserved (its part linear
    in q̇ does not enter the energy), so q̇² = F(q) = 2 (E − V_eff(q)) / M(q): a quadrature.
 2. Search a small family of substitutions u = g(q) (:data:`SUBSTITUTIONS`) for one that makes
-   u̇² = g'(q)² F(q) a polynomial in u of degree ≤ 4 (the lowest found) — then u(t) is an elliptic function of t (degree
+   u̇² = g'(q)² F(q) a polynomial in u of degree ≤ 4 (the first cubic or lower, else the first quartic) — then u(t) is an elliptic function of t (degree
    3 and 4: Jacobi's; ≤ 2: trigonometric or hyperbolic).  For each candidate q is written as the
    inverse g⁻¹(u), the result brought to a normal form (cancel; sin, cos of acos u as √(1 − u²) ...) and
    accepted only if it is a polynomial in u whose coefficients are free of u.
@@ -83,7 +83,7 @@ def _u() -> sp.Symbol:
     return sp.Symbol("u", real=True)
 
 
-#: (name, g(q), g⁻¹(u)) tried in this order: the lowest degree ≤ 4 wins, the first of equals
+#: (name, g(q), g⁻¹(u)) tried in this order: the first of degree ≤ 3 wins, else the first quartic
 SUBSTITUTIONS: tuple[tuple[str, Callable[[sp.Expr], sp.Expr], Callable[[sp.Expr], sp.Expr]], ...] = (
     ("u = q", lambda q: q, lambda u: u),
     ("u = cos q", sp.cos, sp.acos),
@@ -163,8 +163,8 @@ def _as_polynomial(expr: sp.Expr, u: sp.Symbol) -> sp.Poly | None:
 
 
 def find_substitution(quadrature: Quadrature) -> Substitution:
-    """The u = g(q) of :data:`SUBSTITUTIONS` with u̇² = P(u) a polynomial of the lowest degree ≤ 4 (the first
-    of equals); raises :class:`NoSubstitution` naming the degrees found (beyond quartic) and F otherwise."""
+    """The first u = g(q) of :data:`SUBSTITUTIONS` with u̇² = P(u) a polynomial of degree ≤ 3, else the first
+    quartic; raises :class:`NoSubstitution` naming the degrees found (beyond quartic) and F otherwise."""
     q, F = quadrature.coordinate, quadrature.F
     u = _u()
     found: list[str] = []
@@ -176,10 +176,11 @@ def find_substitution(quadrature: Quadrature) -> Substitution:
         if p is None:
             continue
         if p.degree() <= MAX_DEGREE:
-            # the lowest degree wins (Binet's orbit: r gives a quartic, 1/r a quadratic); ≤ 2 cannot be beaten
+            # past a quartic the search goes on for a lower degree (Binet's orbit: r gives a quartic, 1/r a
+            # quadratic); a cubic or lower is taken at once (each further candidate costs a symbolic normal form)
             if best is None or p.degree() < best.degree:
                 best = Substitution(name, g(q), p, p.degree(), u, quadrature.independent)
-            if best.degree <= 2:
+            if best.degree <= 3:
                 break
             continue
         found.append(f"{name}: degree {p.degree()}")
