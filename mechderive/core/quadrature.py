@@ -39,7 +39,8 @@ from ..errors import DerivationError
 from .lagrangian import LagrangianModel
 
 __all__ = ["Quadrature", "Substitution", "Oscillation", "NoQuadrature", "NoSubstitution", "SUBSTITUTIONS",
-           "reduce_to_quadrature", "find_substitution", "oscillation", "MAX_DEGREE"]
+           "reduce_to_quadrature", "find_substitution", "oscillation", "MAX_DEGREE", "Shape", "SHAPES",
+           "cyclic_rates"]
 
 #: the largest degree of u̇² = P(u) solved by elliptic functions
 MAX_DEGREE = 4
@@ -308,3 +309,102 @@ def oscillation(substitution: Substitution, values: dict, q0: float, *, dps: int
         else:
             period, kind = u_period, "oscillation between turning points"
         return Oscillation((a, b), folds, u_period, period, kind)
+
+
+# --- the substitution's shape: branches and folds, for q(t) from u(t) --------------------------------
+
+@dataclass(frozen=True)
+class Shape:
+    """How q is read back from u = g(q) numerically (NumPy): ``dg`` = g'(q); ``inverse(u, q0)`` = g⁻¹(u) on the
+    monotone branch of g holding q0; ``folds``: (u_e, q_e, repeat) for each value u_e where g'(q) = 0, at
+    q = q_e + k·repeat (repeat None: once); near a fold |u − u_e| = σ² with q − q_e = ``scale``·f(σ/√2),
+    f = ``local`` ("asin", "asinh" or "identity") — the coordinate in which q passes the fold smoothly.
+    """
+
+    dg: Callable
+    inverse: Callable
+    folds: tuple = ()
+    local: str = "identity"
+    scale: float = 1.0
+
+    def fold_point(self, u_e: float, q0: float) -> float | None:
+        """The point q_e of the fold at u = u_e nearest q0 (None if g has no fold there)."""
+        for value, q_e, repeat in self.folds:
+            if abs(value - u_e) <= 1e-9 * (1 + abs(value)):
+                return q_e if repeat is None else q_e + repeat * round((q0 - q_e) / repeat)
+        return None
+
+
+def _np():
+    import numpy
+
+    return numpy
+
+
+def _inverse_cos(u, q0):
+    np = _np()
+    base = 2 * np.pi * np.round(q0 / (2 * np.pi))
+    return base + (1.0 if q0 - base >= 0 else -1.0) * np.arccos(np.clip(u, -1.0, 1.0))
+
+
+def _inverse_sin(u, q0):
+    np = _np()
+    base = 2 * np.pi * np.round(q0 / (2 * np.pi))
+    x = np.arcsin(np.clip(u, -1.0, 1.0))
+    if abs(q0 - base) <= np.pi / 2:
+        return base + x
+    return base + (np.pi if q0 > base else -np.pi) - x
+
+
+#: the numeric shape of each member of :data:`SUBSTITUTIONS`, by name
+SHAPES: dict[str, Shape] = {
+    "u = q": Shape(lambda q: _np().ones_like(q), lambda u, q0: u),
+    "u = cos q": Shape(lambda q: -_np().sin(q), _inverse_cos,
+                       ((1.0, 0.0, 2 * 3.141592653589793), (-1.0, 3.141592653589793, 2 * 3.141592653589793)),
+                       "asin", 2.0),
+    "u = sin q": Shape(lambda q: _np().cos(q), _inverse_sin,
+                       ((1.0, 3.141592653589793 / 2, 2 * 3.141592653589793),
+                        (-1.0, -3.141592653589793 / 2, 2 * 3.141592653589793)), "asin", 2.0),
+    "u = 1/q": Shape(lambda q: -1.0 / q**2, lambda u, q0: 1.0 / u),
+    "u = q²": Shape(lambda q: 2.0 * q, lambda u, q0: (1.0 if q0 >= 0 else -1.0) * _np().sqrt(_np().maximum(u, 0.0)),
+                    ((0.0, 0.0, None),), "identity", 2.0**0.5),
+    "u = cosh q": Shape(lambda q: _np().sinh(q),
+                        lambda u, q0: (1.0 if q0 >= 0 else -1.0) * _np().arccosh(_np().maximum(u, 1.0)),
+                        ((1.0, 0.0, None),), "asinh", 2.0),
+    "u = sin(q/2)": Shape(lambda q: 0.5 * _np().cos(q / 2), lambda u, q0: 2.0 * _inverse_sin(u, q0 / 2),
+                          ((1.0, 3.141592653589793, 4 * 3.141592653589793),
+                           (-1.0, -3.141592653589793, 4 * 3.141592653589793)), "asin", 4.0),
+    "u = tan(q/2)": Shape(lambda q: 0.5 / _np().cos(q / 2) ** 2,
+                          lambda u, q0: 2.0 * _np().arctan(u) + 2 * _np().pi * _np().round(q0 / (2 * _np().pi))),
+}
+
+
+def cyclic_rates(model: LagrangianModel, substitution: Substitution) -> dict:
+    """{cyclic coordinate name: (N, D)}: each cyclic coordinate's rate ċ as a rational function N(u)/D(u) of the
+    substitution's u (sympy Polys in u over the parameters and momenta), or a string saying why it is not one
+    (a rate odd in the fold's sense, e.g. sin q under u = cos q)."""
+    u = substitution.variable
+    inverse = dict((n, inv) for n, _, inv in SUBSTITUTIONS)[substitution.name]
+    remaining = model.remaining_coordinates[0]
+    position = model.positions[model.coordinates.index(remaining)]
+    out: dict = {}
+    for c in model.cyclic_coordinates:
+        name = c.func.__name__
+        rate = model.cyclic_velocities[model.velocities[model.coordinates.index(c)]]
+        in_u = rate.subs(position, inverse(u))
+        try:
+            e = sp.cancel(sp.together(in_u))
+        except (TypeError, ValueError, NotImplementedError, RecursionError):
+            out[name] = f"d{name}/dt = {rate} is not a rational function of {substitution.name[4:]}"
+            continue
+        num, den = sp.fraction(e)
+        try:
+            N, D = sp.Poly(sp.expand(num), u), sp.Poly(sp.expand(den), u)
+        except sp.PolynomialError:
+            out[name] = f"d{name}/dt = {rate} is not a rational function of {substitution.name[4:]}"
+            continue
+        if any(x.has(u) for x in N.coeffs() + D.coeffs()):
+            out[name] = f"d{name}/dt = {rate} is not a rational function of {substitution.name[4:]}"
+            continue
+        out[name] = (N, D)
+    return out

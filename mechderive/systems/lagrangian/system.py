@@ -29,7 +29,7 @@ from collections import OrderedDict
 from typing import TYPE_CHECKING, Any, Mapping, Sequence
 
 from ...errors import InvalidInputError
-from ..base import Derivation, Key, Quantity, Solved, System
+from ..base import Derivation, Key, OutOfReach, Quantity, Solved, System
 
 if TYPE_CHECKING:  # pragma: no cover
     import numpy as np
@@ -81,7 +81,9 @@ class LagrangianSystem(System):
     summary = _SUMMARY
     section = ""
     extra_keys = ("output.expressions",)
-    methods = ("integrate",)
+    #: "exact": the closed form the toolkit finds itself (:mod:`.closed`) where L reduces to an elliptic
+    #: quadrature; ``auto`` takes it when it applies to the scene's motion, else integrates and says why
+    methods = ("exact", "integrate")
 
     def __init__(self, definition: "Definition", name: str = "lagrangian") -> None:
         self.name = name  # type: ignore[misc]  # an instance's own name (a program's system)
@@ -215,7 +217,11 @@ class LagrangianSystem(System):
     # --- solving -----------------------------------------------------------------------------
 
     def solve(self, scene: "Scene", method: str, t: "np.ndarray") -> Solved:
-        """Integrate from the scene's initial state; only the requested expressions are evaluated."""
+        """The closed form (``method = "exact"``, :mod:`.closed`; raises
+        :class:`~mechderive.systems.base.OutOfReach` with the reason where there is none), or integrate from the
+        scene's initial state; only the requested expressions are evaluated."""
+        if method == "exact":
+            return self._exact(scene, t)
         from ...solvers.driver import integrate, integrate_to_rtol
 
         d, eq = self.definition, self.equations
@@ -250,6 +256,59 @@ class LagrangianSystem(System):
             "definition": d.digest,
         }
         return Solved({q: columns[q] for q in wanted}, info, traj)
+
+    def _exact(self, scene: "Scene", t: "np.ndarray") -> Solved:
+        """The closed form's columns and its measured estimate (doubles against 40 digits at sampled times).
+
+        The conserved quantities are evaluated on the closed form's state (they need q, q̇ and each ċ = R_c(u),
+        not the cyclic angles, so no Π is built for them): the report's drift is the closed form's own residual.
+        """
+        import numpy as np
+
+        from .closed import ExactRun, closed_motion
+
+        d, eq = self.definition, self.equations
+        motion = closed_motion(self, dict(scene.parameters), dict(scene.initial))
+        wanted = tuple(scene.quantities)
+        expr_names = [e for e, _ in d.expressions]
+        needs_angles = any(w in expr_names for w in wanted)
+        state_wanted = [*(q for q in d.coordinates if q in wanted or needs_angles or q == motion.remaining),
+                        *(q + "_dot" for q in d.coordinates)]
+        cols = motion.columns(t, state_wanted)
+        estimate, per_column = motion.estimate(t, [w for w in state_wanted if w in wanted or needs_angles])
+        names = [*d.coordinates, *(q + "_dot" for q in d.coordinates)]
+        # a cyclic angle nobody asked for stays at its start: the invariants do not depend on it
+        y = np.column_stack([np.broadcast_to(cols[n] if n in cols else float(scene.initial[n]), t.shape)
+                             for n in names])
+        p = [scene.parameters[n] for n in d.dynamics_parameters]
+        run = ExactRun(t, y, eq.term.invariant_names, eq.term.invariant_function()(*p, *y.T))
+        # the closed form checks itself: its angles against its rates, its invariants against their start
+        failed = motion.check_derivatives(t, [n for n in names if n in cols])
+        for name in eq.conserved_names:
+            values, scale = run.invariant(name), float(np.max(np.abs(run.invariant(f"scale_{name}"))))
+            moved = float(np.max(np.abs(values - values[0])))
+            if not moved <= 1e-9 * scale:
+                failed = failed or f"{name} drifts by {moved:.3g} (of {scale:.3g}) on it"
+        if failed:
+            raise OutOfReach(f"the closed form ({motion.found.name}, {motion.kind}) failed its own check: {failed}")
+        out = {k: np.ascontiguousarray(cols[k], dtype=float) for k in wanted if k in cols}
+        for q in wanted:
+            if q in run.invariant_names:
+                out[q] = run.invariant(q).copy()
+        if needs_angles:
+            vals = self._expressions([scene.parameters[n] for n in d.parameters], y, t)
+            out.update({e: v for e, v in zip(expr_names, vals) if e in wanted})
+        info = {
+            "error_estimate": estimate,
+            "error_estimate_kind": ("absolute, in the outputs' units: the doubles against a 40-digit evaluation of "
+                                    "the same closed form at up to 9 of the times (the last included)"),
+            "closed_form": motion.describe(),
+            "per_column_estimate": per_column,
+            "cyclic_coordinates": list(eq.cyclic),
+            "energy_conserved": True,
+            "definition": d.digest,
+        }
+        return Solved({q: out[q] for q in wanted}, info, run)
 
     def _columns(self, traj: Any, wanted: Sequence[str], p_all: Sequence[float]) -> dict:
         import numpy as np
@@ -345,14 +404,31 @@ class LagrangianSystem(System):
 
     def _substitution(self) -> Any:
         """The reduction to u̇² = P(u) (:mod:`mechderive.core.quadrature`), or None where there is none (cached)."""
+        return self.reduction()[0]
+
+    def reduction(self) -> tuple[Any, str | None]:
+        """(substitution, None), or (None, the reason there is none): the reduction to u̇² = P(u) (cached)."""
         if "_found" not in self.__dict__:
             from ...core.quadrature import NoQuadrature, NoSubstitution, find_substitution, reduce_to_quadrature
+            from ...errors import DerivationError
 
-            try:
-                self.__dict__["_found"] = find_substitution(reduce_to_quadrature(self.equations.lagrangian_model))
-            except (NoQuadrature, NoSubstitution):
-                self.__dict__["_found"] = None
+            if self.definition.uses_time:
+                self.__dict__["_found"] = (None, "the Lagrangian depends on t explicitly")
+            else:
+                try:
+                    self.__dict__["_found"] = (find_substitution(reduce_to_quadrature(self.equations.lagrangian_model)),
+                                               None)
+                except (NoQuadrature, NoSubstitution, DerivationError) as exc:
+                    self.__dict__["_found"] = (None, str(exc))
         return self.__dict__["_found"]
+
+    def cyclic_rates(self) -> dict:
+        """{cyclic coordinate: (N, D) or the reason}: ċ = N(u)/D(u) (:func:`mechderive.core.quadrature.cyclic_rates`)."""
+        if "_rates" not in self.__dict__:
+            from ...core.quadrature import cyclic_rates
+
+            self.__dict__["_rates"] = cyclic_rates(self.equations.lagrangian_model, self.reduction()[0])
+        return self.__dict__["_rates"]
 
     def _closed_period(self, scene: "Scene", drifts: dict) -> tuple[Any, Any] | None:
         """(period, estimate) from the elliptic reduction where the system has one, else None (measured instead).
@@ -534,7 +610,7 @@ class LagrangianFamily(System):
     summary = _SUMMARY
     section = ""
     extra_keys = ("coordinates", "lagrangian", "output.expressions")
-    methods = ("integrate",)
+    methods = ("exact", "integrate")
 
     def configure(self, definition: Mapping[str, Any]) -> LagrangianSystem:
         """The concrete system of a scene's ``coordinates``, ``lagrangian`` and ``[output.expressions]``."""

@@ -1,0 +1,482 @@
+"""The motion u(t) solving u̇² = P(u), P a real polynomial of degree 2, 3 or 4, in Jacobi elliptic functions.
+
+This is the numeric half of the generic closed form (issue 16; the symbolic half, which finds u = g(q)
+and P, is :mod:`mechderive.core.quadrature`).  One formula covers every real-root configuration: with
+w = sn²(v|m), v = κ t + v_s,
+
+    u = M(w) = (A + B w) / (C + D w),          M(0) = a,  M(1) = b,  M(1/m) = c,  M(∞) = d,
+
+where (a, b) is the interval of motion (P > 0 between two adjacent roots, a the end the labels start
+from) and c, d are the next two branch points of √P in the cyclic order of the projective line — the
+other roots, and ∞ when the degree is odd (for a quadratic c = d = ∞ and m = 0).  M maps the four
+branch points of ẇ² = 4κ² w(1 − w)(1 − m w) onto those of u̇² = P(u), so m is their cross-ratio and κ
+the constant ratio of the two sides; the chapter's u = u1 + (u2 − u1) sn²(…) for the heavy top (3.76) is
+the cubic case (d = ∞, B/C = u2 − u1), and Byrd & Friedman's 236.00, 254.00-257.00 and 238.00 are the
+others (oscillation between adjacent roots, and the cubic's unbounded branch u ≥ r3 through d = ∞).
+
+A rational function R(u) of the motion (a cyclic coordinate's rate ċ = R(u)) integrates in closed
+form the same way: R(M(w)) = Q0 + Q1 w + Σ_j c_j / (1 − n_j w) by partial fractions in w, and
+
+    ∫ R dt = (1/κ) [Q0 v + Q1 (v − E(am v|m))/m + Σ c_j Π(n_j; am v|m)]   (DLMF 19.2.7, 22.16.1),
+
+with the per-period advance from the complete integrals.  The constants (roots, M, m, κ, v_s, n_j,
+c_j) are computed at 40 digits with mpmath and rounded once; the functions are then evaluated in
+NumPy by :mod:`mechderive.special` (phase reduced by 4K in double-double, so long times keep their
+digits).
+
+Not covered (the caller integrates instead; :class:`NotElliptic` says why): a quartic with complex
+roots, a cubic with one real root, an unbounded quadratic, degree ≤ 1, a start on a double root
+(steady motion, separatrix), and rates with complex poles, poles on the motion, or a polynomial part
+of degree > 1 in w.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Sequence
+
+import numpy as np
+
+from ..errors import InvalidInputError
+
+__all__ = ["NotElliptic", "EllipticMotion", "RateIntegral", "elliptic_motion", "rate_integral", "DPS"]
+
+#: working precision of the constants (decimal digits)
+DPS = 40
+
+
+class NotElliptic(InvalidInputError):
+    """u̇² = P(u) from this start is not one of the configurations solved here (the message says why)."""
+
+
+def _mp():
+    import mpmath
+
+    return mpmath
+
+
+def _split_mp(x) -> tuple[float, float]:
+    """x (mpf) as a double-double (hi, lo)."""
+    mp = _mp()
+    hi = float(x)
+    return hi, float(x - mp.mpf(hi))
+
+
+@dataclass
+class EllipticMotion:
+    """u(t) = M(sn²(κ t + v_s | m)) from :func:`elliptic_motion` (see the module docstring).
+
+    ``interval`` = (a, b), ``branch_points`` = (a, b, c, d) (mpmath numbers, ±inf allowed),
+    ``mobius`` = (A, B, C, D), ``m``, ``m1`` = 1 − m, ``kappa``, ``v_start`` and ``K`` at 40 digits;
+    ``u_period`` = 2K/κ the period of u (u is even about each turning point: w has period 2K in v).
+    """
+
+    coefficients: tuple
+    interval: tuple
+    branch_points: tuple
+    mobius: tuple
+    m: Any
+    m1: Any
+    kappa: Any
+    v_start: Any
+    K: Any
+    u_period: Any
+    degree: int
+    _f: dict = field(default_factory=dict, repr=False)
+
+    # --- the phase ---------------------------------------------------------------------------
+
+    def phase(self, t: Any) -> tuple[np.ndarray, np.ndarray]:
+        """(n, r): v(t) = κ t + v_s = n·4K + r with |r| ≲ 4K, r in double-double arithmetic so that v's
+        rounding does not grow with t (the reduction the Jacobi functions' ``periods`` argument takes)."""
+        from ..special._doubledouble import two_prod, two_sum
+
+        t = np.asarray(t, dtype=float)
+        k_hi, k_lo = self._doubles("kappa")
+        s_hi, s_lo = self._doubles("v_start")
+        f_hi, f_lo = self._doubles("four_K")
+        v = k_hi * t + s_hi
+        n = np.floor(v / f_hi + 0.5)
+        p, pe = two_prod(np.broadcast_to(k_hi, t.shape).astype(float), t)
+        h, he = two_prod(n, np.broadcast_to(f_hi, n.shape).astype(float))
+        d, de = two_sum(p, -h)
+        r = d + (de + pe - he + k_lo * t + s_hi + s_lo - n * f_lo)
+        return n, r
+
+    def _doubles(self, name: str) -> tuple[float, float]:
+        if name not in self._f:
+            value = 4 * self.K if name == "four_K" else getattr(self, name)
+            self._f[name] = _split_mp(value)
+        return self._f[name]
+
+    def jacobi(self, t: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(sn, cn, dn, n, r) at v(t) (see :meth:`phase`)."""
+        from ..special import jacobi_sn_cn_dn
+
+        n, r = self.phase(t)
+        sn, cn, dn = jacobi_sn_cn_dn(r, float(self.m), m1=float(self.m1))
+        return (np.asarray(sn, float), np.asarray(cn, float), np.asarray(dn, float), n, r)
+
+    # --- u and its distances to the ends -------------------------------------------------------
+
+    def _mob(self) -> tuple[float, float, float, float, float]:
+        if "mob" not in self._f:
+            A, B, C, D = self.mobius
+            self._f["mob"] = (float(A), float(B), float(C), float(D), float(B * C - A * D))
+        return self._f["mob"]
+
+    def u(self, t: Any, jac: tuple | None = None) -> np.ndarray:
+        """u(t), evaluated from the nearer end of the interval (u − a ∝ sn², b − u ∝ cn²: each to a few
+        ulp relative near its own end)."""
+        sn, cn, dn, _, _ = self.jacobi(t) if jac is None else jac
+        A, B, C, D, det = self._mob()
+        w = sn * sn
+        den = C + D * w
+        a, b = self.interval
+        near_a = w <= 0.5
+        with np.errstate(all="ignore"):
+            from_a = (float(a) if np.isfinite(float(a)) else 0.0) + det * w / (C * den)
+            from_b = (float(b) if np.isfinite(float(b)) else 0.0) - det * (cn * cn) / ((C + D) * den)
+            plain = (A + B * w) / den
+        use_a = near_a & np.isfinite(float(a)) & (C != 0)
+        use_b = ~near_a & np.isfinite(float(b)) & (C + D != 0)
+        return np.where(use_a, from_a, np.where(use_b, from_b, plain))
+
+    def signed_root(self, end: str, t: Any, jac: tuple | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """(σ, σ̇): σ = ±√|u − e| at the end e = a (``end="a"``, sign of sn) or b (sign of cn), and its
+        time derivative — the coordinate in which a fold of the substitution is smooth."""
+        sn, cn, dn, _, _ = self.jacobi(t) if jac is None else jac
+        A, B, C, D, det = self._mob()
+        w = sn * sn
+        den = C + D * w
+        kap = float(self.kappa)
+        scale = abs(det / C) if end == "a" else abs(det / (C + D))
+        rho = np.sqrt(scale / np.abs(den))
+        drho_dw = -0.5 * rho * D / den
+        w_dot = 2.0 * kap * sn * cn * dn
+        if end == "a":
+            return sn * rho, kap * cn * dn * rho + sn * drho_dw * w_dot
+        return cn * rho, -kap * sn * dn * rho + cn * drho_dw * w_dot
+
+    def u_dot(self, t: Any, jac: tuple | None = None) -> np.ndarray:
+        """u̇ = M'(w) ẇ with ẇ = 2κ sn cn dn."""
+        sn, cn, dn, _, _ = self.jacobi(t) if jac is None else jac
+        A, B, C, D, det = self._mob()
+        w = sn * sn
+        return det / (C + D * w) ** 2 * 2.0 * float(self.kappa) * sn * cn * dn
+
+    def amplitude(self, t: Any) -> np.ndarray:
+        """am(v(t)|m), continuous in t (a rotation's angle is affine in it)."""
+        from ..special import jacobi_am
+
+        n, r = self.phase(t)
+        return np.asarray(jacobi_am(r, float(self.m), m1=float(self.m1)), float) + 2.0 * np.pi * n
+
+    # --- 40-digit evaluation, for the estimate -------------------------------------------------
+
+    def u_mp(self, t) -> Any:
+        """u(t) at the working precision (mpmath), as a reference for the doubles."""
+        mp = _mp()
+        with mp.workdps(DPS):
+            v = self.kappa * mp.mpf(t) + self.v_start
+            sn = mp.ellipfun("sn", v, m=self.m)
+            A, B, C, D = self.mobius
+            w = sn * sn
+            return (A + B * w) / (C + D * w)
+
+
+def _real_roots(coeffs: Sequence) -> list:
+    mp = _mp()
+    roots = mp.polyroots(list(coeffs), maxsteps=400, extraprec=6 * mp.mp.dps)
+    tiny = mp.mpf(10) ** (-mp.mp.dps // 2)
+    real = sorted(mp.re(r) for r in roots if abs(mp.im(r)) <= tiny * (1 + abs(r)))
+    return real
+
+
+def _projective(x) -> tuple:
+    mp = _mp()
+    return (mp.mpf(1), mp.mpf(0)) if mp.isinf(x) else (x, mp.mpf(1))
+
+
+def _mobius(a, b, d) -> tuple:
+    """(A, B, C, D) with (A + B w)/(C + D w) = a, b, d at w = 0, 1, ∞ (any of them may be ∞)."""
+    (a1, a0), (b1, b0), (d1, d0) = _projective(a), _projective(b), _projective(d)
+    lam = d0 * b1 - d1 * b0
+    mu = a1 * b0 - a0 * b1
+    return lam * a1, mu * d1, lam * a0, mu * d0
+
+
+def _inverse(mobius: tuple, x) -> Any:
+    """w with M(w) = x (x may be ∞; the result may be ∞)."""
+    mp = _mp()
+    A, B, C, D = mobius
+    x1, x0 = _projective(x)
+    num, den = A * x0 - C * x1, D * x1 - B * x0
+    return mp.inf if den == 0 else num / den
+
+
+def elliptic_motion(coefficients: Sequence, u0: Any, direction: int) -> EllipticMotion:
+    """u(t) with u̇² = P(u) (``coefficients`` highest first, as numbers mpmath reads at :data:`DPS` digits),
+    u(0) = ``u0`` and u̇(0) of sign ``direction`` (0 at a turning point).
+
+    Raises :class:`NotElliptic` for the configurations listed in the module docstring.
+    """
+    mp = _mp()
+    with mp.workdps(DPS):
+        c = [mp.mpf(x) for x in coefficients]
+        while c and c[0] == 0:
+            c = c[1:]
+        degree = len(c) - 1
+        if degree < 2:
+            raise NotElliptic(f"expected u̇² = P(u) of degree 2, 3 or 4, got degree {degree}: uniform or "
+                              "uniformly accelerated motion, not periodic")
+        u0 = mp.mpf(u0)
+        P = lambda x: mp.polyval(c, x)  # noqa: E731
+        roots = _real_roots(c)
+        if degree == 4 and len(roots) < 4 or degree == 3 and len(roots) < 3 or degree == 2 and len(roots) < 2:
+            raise NotElliptic(f"expected {degree} real roots of P (degree {degree}), got {len(roots)}: a "
+                              "configuration with complex roots, not covered by this closed form")
+        if any(abs(x - y) <= mp.mpf(10) ** (-DPS // 2) * (1 + abs(x)) for x, y in zip(roots, roots[1:])):
+            raise NotElliptic("expected simple roots of P, got a double root: a steady motion or a separatrix")
+        # the branch points in the cyclic order of the projective line; ∞ is one when the degree is odd
+        points = list(roots) + ([mp.inf] if degree % 2 else [])
+        slack = mp.mpf(2) ** -40 * (1 + abs(u0))
+        found = None
+        count = len(points)
+        for i in range(count):
+            lo, hi = points[i], points[(i + 1) % count]
+            if degree == 2 and i == 1:
+                break  # the quadratic's outside (through ∞) is unbounded
+            if mp.isinf(lo):
+                continue
+            wraps = not mp.isinf(hi) and hi < lo  # through ∞ (a quartic with a negative... leading coefficient)
+            if mp.isinf(hi):
+                mid = lo + 1 + abs(lo)
+                inside = u0 >= lo - slack
+            elif wraps:
+                mid = hi - 1 - abs(hi)
+                inside = u0 >= lo - slack or u0 <= hi + slack
+            else:
+                mid = (lo + hi) / 2
+                inside = lo - slack <= u0 <= hi + slack
+            if inside and P(mid) > 0:
+                found = i
+                break
+        if found is None:
+            raise NotElliptic(f"expected u̇² = P(u0) ≥ 0 inside an interval of motion, got P(u0) = "
+                              f"{mp.nstr(P(u0), 5)} at u0 = {mp.nstr(u0, 10)} (roots {[mp.nstr(r, 10) for r in roots]})")
+        if degree == 2:
+            a, b, cc, d = points[0], points[1], mp.inf, mp.inf
+            if c[0] > 0:
+                raise NotElliptic("expected a bounded quadratic (negative leading coefficient), got an unbounded one")
+        else:
+            # (lo, hi, X, Y) in the circle's order, or reversed (hi, lo, Y, X): both give the same m; take the
+            # one with d = ∞ when ∞ is a branch point, so that M is affine (u = a + (b − a) w, the chapter's form)
+            a, b, cc, d = (points[(found + k) % count] for k in range(4))
+            if mp.isinf(cc):
+                a, b, cc, d = b, a, d, cc
+        if degree == 4 and (mp.isinf(a) or mp.isinf(b)):
+            raise NotElliptic("expected a finite interval of motion")
+        if degree == 4 and b < a:
+            raise NotElliptic("expected motion between two finite roots, got u passing through ∞ (a quartic whose "
+                              "motion goes through the point at infinity of u): not covered")
+        mob = _mobius(a, b, d)
+        winv = _inverse(mob, cc)
+        m = mp.mpf(0) if mp.isinf(winv) else 1 / winv
+        if not 0 <= m < 1:
+            raise NotElliptic(f"expected a parameter 0 ≤ m < 1 from the cross-ratio of the roots, got {mp.nstr(m, 8)}")
+        A, B, C, D = mob
+        det = B * C - A * D
+
+        def kappa_sq(w):
+            deriv = det / (C + D * w) ** 2
+            return P((A + B * w) / (C + D * w)) / (4 * deriv**2 * w * (1 - w) * (1 - m * w))
+
+        k2 = kappa_sq(mp.mpf(1) / 2)
+        check = kappa_sq(mp.mpf(3) / 10)
+        if not k2 > 0 or abs(check - k2) > mp.mpf(10) ** (-DPS // 2) * abs(k2):
+            raise NotElliptic("expected the substitution w = sn² to fit u̇² = P(u) (κ² constant), got "
+                              f"{mp.nstr(k2, 8)} and {mp.nstr(check, 8)}: an inconsistent root configuration")
+        kappa = mp.sqrt(k2)
+        m1 = 1 - m
+        K = mp.ellipk(m)
+        # the start: w0 = M⁻¹(u0) in [0, 1], v0 = F(asin √w0 | m); v_s = ±v0 by the sign of ẇ = u̇/M'(w)
+        w0 = _inverse(mob, u0)
+        w0 = min(max(w0, mp.mpf(0)), mp.mpf(1))
+        v0 = mp.ellipf(mp.asin(mp.sqrt(w0)), m)
+        w_direction = direction * (1 if det / (C + D * w0) ** 2 > 0 else -1)
+        v_start = -v0 if w_direction < 0 else v0
+        return EllipticMotion(tuple(c), (a, b), (a, b, cc, d), mob, m, m1, kappa, v_start, K, 2 * K / kappa, degree)
+
+
+# --- ∫ R(u(t)) dt for a rational R ---------------------------------------------------------------
+
+@dataclass
+class RateIntegral:
+    """∫₀^t R(u(t')) dt' = (1/κ)[Q0 (v − v_s) + Q1 (I(v) − I(v_s)) + Σ c_j (Π(n_j; v) − Π(n_j; v_s))],
+    I(v) = ∫₀^v sn² — see the module docstring.  ``advance``: the increase per period of u (2K in v)."""
+
+    motion: EllipticMotion
+    q0: Any
+    q1: Any
+    terms: tuple  # ((c_j, n_j), ...) at the working precision
+    advance: Any
+    start: tuple = ()
+
+    def __call__(self, t: Any, jac: tuple | None = None) -> np.ndarray:
+        from ..special import elliptic_e_incomplete, pi_of_am
+
+        mo = self.motion
+        sn, cn, dn, n, r = mo.jacobi(t) if jac is None else jac
+        m, m1 = float(mo.m), float(mo.m1)
+        kap = float(mo.kappa)
+        n4 = n  # v = n·4K + r
+        total = float(self.q0) * (r - float(mo.v_start)) + float(self.q0) * 4.0 * n4 * float(mo.K)
+        if self.q1 != 0:
+            am = mo.amplitude(t)
+            # I(v) = (v − E(am v))/m, with E quasi-periodic in am (E(φ + π) = E(φ) + 2E)
+            e_inc = np.asarray(elliptic_e_incomplete(am, m, m1=m1), float)
+            v_full = r + 4.0 * n4 * float(mo.K)
+            total = total + float(self.q1) * ((v_full - e_inc) / m - float(self._i_start))
+        for (coef, nj), start in zip(self.terms, self.start):
+            pi = np.asarray(pi_of_am(float(nj), r, m, m1=m1, periods=n4.astype(np.int64)), float)
+            total = total + float(coef) * (pi - float(start))
+        return total / kap
+
+    @property
+    def _i_start(self) -> Any:
+        mp = _mp()
+        mo = self.motion
+        with mp.workdps(DPS):
+            if self.q1 == 0:
+                return mp.mpf(0)
+            am = _am_mp(mo.v_start, mo.m)
+            return (mo.v_start - mp.ellipe(am, mo.m)) / mo.m
+
+    def value_mp(self, t) -> Any:
+        """The integral at t at the working precision (mpmath), a reference for the doubles."""
+        mp = _mp()
+        mo = self.motion
+        with mp.workdps(DPS):
+            v = mo.kappa * mp.mpf(t) + mo.v_start
+            am, am_s = _am_mp(v, mo.m), _am_mp(mo.v_start, mo.m)
+            total = self.q0 * (v - mo.v_start)
+            if self.q1 != 0:
+                total += self.q1 * ((v - mp.ellipe(am, mo.m)) - (mo.v_start - mp.ellipe(am_s, mo.m))) / mo.m
+            for coef, nj in self.terms:
+                total += coef * (_pi_mp(nj, am, mo.m) - _pi_mp(nj, am_s, mo.m))
+            return total / mo.kappa
+
+
+def _am_mp(v, m) -> Any:
+    """am(v|m), continuous (mpmath has sn, cn but no am)."""
+    mp = _mp()
+    K = mp.ellipk(m)
+    j = mp.nint(v / (2 * K))
+    r = v - 2 * K * j
+    return mp.atan2(mp.ellipfun("sn", r, m=m), mp.ellipfun("cn", r, m=m)) + mp.pi * j
+
+
+def _pi_mp(n, phi, m) -> Any:
+    """Π(n; φ|m) for any real φ: 2jΠ(n|m) + Π(n; φ − jπ|m)."""
+    mp = _mp()
+    j = mp.nint(phi / mp.pi)
+    rest = phi - mp.pi * j
+    return (2 * j * mp.ellippi(n, m) if j else 0) + mp.ellippi(n, rest, m)
+
+
+def rate_integral(motion: EllipticMotion, numerator: Sequence, denominator: Sequence) -> RateIntegral:
+    """∫ R(u) dt along ``motion`` for R = N/D with N, D given by their coefficients in u (highest first, numbers
+    mpmath reads); raises :class:`NotElliptic` where the partial fractions in w are not the simple kind the
+    module docstring lists."""
+    mp = _mp()
+    with mp.workdps(DPS):
+        N = [mp.mpf(x) for x in numerator]
+        Dn = [mp.mpf(x) for x in denominator]
+        A, B, C, D = motion.mobius
+        k = max(len(N), len(Dn)) - 1
+        lin_a, lin_c = [B, A], [D, C]  # A + B w and C + D w, highest first
+
+        def poly_mul(p, q):
+            out = [mp.mpf(0)] * (len(p) + len(q) - 1)
+            for i, x in enumerate(p):
+                for j, y in enumerate(q):
+                    out[i + j] += x * y
+            return out
+
+        def poly_pow(p, e):
+            out = [mp.mpf(1)]
+            for _ in range(e):
+                out = poly_mul(out, p)
+            return out
+
+        def in_w(coeffs):
+            deg = len(coeffs) - 1
+            total = [mp.mpf(0)]
+            for i, x in enumerate(coeffs):
+                power = deg - i
+                term = poly_mul(poly_pow(lin_a, power), poly_pow(lin_c, k - power))
+                term = [x * y for y in term]
+                if len(term) > len(total):
+                    total = [mp.mpf(0)] * (len(term) - len(total)) + total
+                total = [s + y for s, y in zip(total, [mp.mpf(0)] * (len(total) - len(term)) + term)]
+            return total
+
+        num, den = in_w(N), in_w(Dn)
+        # strip (numerically) zero leading coefficients: a Möbius with D = 0 lowers the degrees
+        scale = max(abs(x) for x in den)
+        while len(den) > 1 and abs(den[0]) <= mp.mpf(10) ** (-DPS + 5) * scale:
+            den = den[1:]
+        nscale = max([abs(x) for x in num] + [mp.mpf(0)])
+        while len(num) > 1 and abs(num[0]) <= mp.mpf(10) ** (-DPS + 5) * max(nscale, scale):
+            num = num[1:]
+        # polynomial division num = quot·den + rem
+        quot: list = []
+        rem = list(num)
+        while len(rem) >= len(den):
+            f = rem[0] / den[0]
+            quot.append(f)
+            rem = [x - f * y for x, y in zip(rem, den + [mp.mpf(0)] * (len(rem) - len(den)))][1:]
+        if len(quot) > 2:
+            raise NotElliptic(f"expected the rate's polynomial part in w = sn² of degree ≤ 1, got {len(quot) - 1}")
+        q1 = quot[-2] if len(quot) == 2 else mp.mpf(0)
+        q0 = quot[-1] if quot else mp.mpf(0)
+        terms = []
+        if len(den) > 1:
+            poles = mp.polyroots(den, maxsteps=400, extraprec=6 * DPS)
+            dden = [x * (len(den) - 1 - i) for i, x in enumerate(den[:-1])]
+            tiny = mp.mpf(10) ** (-DPS // 2)
+            rscale = max([abs(x) for x in rem] + [mp.mpf(0)])
+            for wj in poles:
+                dval = mp.polyval(dden, wj)
+                residue = mp.polyval(rem, wj) / dval if rem and dval != 0 else mp.mpf(0)
+                if rscale == 0 or abs(residue) * abs(dval) <= tiny * rscale * (1 + abs(wj)) ** len(rem):
+                    continue  # a removable pole (a zero numerator: no rate, e.g. p_c = 0)
+                if abs(mp.im(wj)) > tiny * (1 + abs(wj)):
+                    raise NotElliptic("expected the rate's poles real in w = sn², got a complex pole (not covered)")
+                wj = mp.re(wj)
+                residue = mp.re(residue)
+                if -tiny <= wj <= 1 + tiny:
+                    raise NotElliptic(f"expected the rate finite on the motion, got a pole at w = {mp.nstr(wj, 8)} "
+                                      "(the motion passes through a pole of the rate)")
+                if abs(dval) <= tiny * scale:
+                    raise NotElliptic("expected simple poles of the rate, got a multiple pole")
+                # r/(w − w_j) = (−r/w_j) / (1 − w/w_j)
+                terms.append((-residue / wj, 1 / wj))
+        m = motion.m
+        K = motion.K
+        advance = q0 * 2 * K + (q1 * 2 * (K - mp.ellipe(m)) / m if q1 != 0 else 0) \
+            + sum(cj * 2 * mp.ellippi(nj, m) for cj, nj in terms)
+        advance = advance / motion.kappa
+        start = tuple(_pi_split_start(nj, motion) for _, nj in terms)
+        return RateIntegral(motion, q0, q1, tuple(terms), advance, start)
+
+
+def _pi_split_start(nj, motion: EllipticMotion) -> float:
+    """Π(n_j; am v_s|m) as evaluated in doubles by the same routine as later times (so the difference at t = 0
+    is exactly zero, and rounding is common to both ends)."""
+    from ..special import pi_of_am
+
+    n, r = motion.phase(np.zeros(1))
+    return float(np.asarray(pi_of_am(float(nj), r, float(motion.m), m1=float(motion.m1),
+                                     periods=n.astype(np.int64)), float)[0])
