@@ -37,6 +37,7 @@ import sympy as sp
 
 from ..errors import DerivationError
 from .lagrangian import LagrangianModel
+from .simplify import trig_normal
 
 __all__ = ["Quadrature", "Substitution", "Oscillation", "NoQuadrature", "NoSubstitution", "SUBSTITUTIONS",
            "reduce_to_quadrature", "find_substitution", "oscillation", "MAX_DEGREE", "Shape", "SHAPES",
@@ -145,10 +146,20 @@ def reduce_to_quadrature(model: LagrangianModel, along: str | None = None) -> Qu
 
 def _as_polynomial(expr: sp.Expr, u: sp.Symbol) -> sp.Poly | None:
     """``expr`` as a polynomial in u (after normal forms), or None if it is not one."""
-    for form in (lambda e: sp.cancel(sp.together(e)), lambda e: sp.cancel(sp.simplify(e))):
+    def transcendental(e: sp.Expr) -> bool:
+        return any(f.has(u) for f in e.atoms(sp.Function))
+
+    def slow(e: sp.Expr) -> sp.Expr:
+        # SymPy's simplify costs seconds; it is only worth it where no function of u is left that the
+        # faster normal forms could not remove (cos u under u = q stays cos u whatever simplify does)
+        if transcendental(e):
+            raise ValueError("a transcendental function of u remains")
+        return sp.cancel(sp.simplify(e))
+
+    for form in (lambda e: sp.cancel(sp.together(e)), lambda e: sp.cancel(trig_normal(e)), slow):
         try:
             e = form(expr)
-        except (TypeError, ValueError, NotImplementedError, RecursionError):
+        except (TypeError, ValueError, NotImplementedError, RecursionError, sp.PolynomialError):
             continue
         num, den = sp.fraction(e)
         if den.has(u):

@@ -39,10 +39,12 @@ import numpy as np
 
 from ..errors import InvalidInputError
 
-__all__ = ["NotElliptic", "EllipticMotion", "RateIntegral", "elliptic_motion", "rate_integral", "DPS"]
+__all__ = ["NotElliptic", "EllipticMotion", "RateIntegral", "elliptic_motion", "rate_integral", "DPS", "REFERENCE_DPS"]
 
 #: working precision of the constants (decimal digits)
 DPS = 40
+#: precision of the reference evaluation an estimate compares the doubles with (ample for double rounding)
+REFERENCE_DPS = 30
 
 
 class NotElliptic(InvalidInputError):
@@ -322,6 +324,7 @@ class RateIntegral:
     terms: tuple  # ((c_j, n_j), ...) at the working precision
     advance: Any
     start: tuple = ()
+    _mp_cache: dict = field(default_factory=dict, repr=False)
 
     def __call__(self, t: Any, jac: tuple | None = None) -> np.ndarray:
         from ..special import elliptic_e_incomplete, pi_of_am
@@ -354,17 +357,22 @@ class RateIntegral:
             return (mo.v_start - mp.ellipe(am, mo.m)) / mo.m
 
     def value_mp(self, t) -> Any:
-        """The integral at t at the working precision (mpmath), a reference for the doubles."""
+        """The integral at t at :data:`REFERENCE_DPS` digits (mpmath), a reference for the doubles."""
         mp = _mp()
         mo = self.motion
-        with mp.workdps(DPS):
+        with mp.workdps(REFERENCE_DPS):
+            if "start" not in self._mp_cache:
+                am_s = _am_mp(mo.v_start, mo.m)
+                self._mp_cache["start"] = (mo.v_start - mp.ellipe(am_s, mo.m) if self.q1 != 0 else 0,
+                                           [_pi_mp(nj, am_s, mo.m) for _, nj in self.terms])
+            i_s, pi_s = self._mp_cache["start"]
             v = mo.kappa * mp.mpf(t) + mo.v_start
-            am, am_s = _am_mp(v, mo.m), _am_mp(mo.v_start, mo.m)
+            am = _am_mp(v, mo.m)
             total = self.q0 * (v - mo.v_start)
             if self.q1 != 0:
-                total += self.q1 * ((v - mp.ellipe(am, mo.m)) - (mo.v_start - mp.ellipe(am_s, mo.m))) / mo.m
-            for coef, nj in self.terms:
-                total += coef * (_pi_mp(nj, am, mo.m) - _pi_mp(nj, am_s, mo.m))
+                total += self.q1 * ((v - mp.ellipe(am, mo.m)) - i_s) / mo.m
+            for (coef, nj), start in zip(self.terms, pi_s):
+                total += coef * (_pi_mp(nj, am, mo.m) - start)
             return total / mo.kappa
 
 

@@ -16,8 +16,8 @@ The recipe, each step derived:
 4. c(t) = c0 + ∫ R_c(u) dt by partial fractions in w = sn² and Π
    (:func:`~mechderive.solvers.quadrature_motion.rate_integral`).
 
-The error estimate is measured on the run: at up to 9 sample times (the last included) every output is
-evaluated again from the Jacobi functions and Π at 40 digits (mpmath), and the largest difference is
+The error estimate is measured on the run: at up to 6 sample times (the last included) every output is
+evaluated again from the Jacobi functions and Π at 30 digits (mpmath), and the largest difference is
 reported; the run is refused (:class:`~mechderive.systems.base.OutOfReach`, so ``method = "auto"``
 integrates instead) if the conserved quantities evaluated on the closed form drift by more than that
 estimate allows.
@@ -274,13 +274,13 @@ class ClosedMotion:
     # --- the estimate ----------------------------------------------------------------------------
 
     def estimate(self, t: np.ndarray, wanted: Sequence[str]) -> tuple[float, dict]:
-        """The largest difference between the doubles and a 40-digit evaluation of the same formulas at up to 9
+        """The largest difference between the doubles and a 30-digit evaluation of the same formulas at up to 6
         of the times (the last included), over the requested coordinates; and each one's."""
         mp = _mp()
-        from ...solvers.quadrature_motion import DPS
+        from ...solvers.quadrature_motion import REFERENCE_DPS as DPS
 
         t = np.asarray(t, dtype=float)
-        picks = np.unique(np.concatenate([np.linspace(0, len(t) - 1, min(len(t), 9)).astype(int)]))
+        picks = np.unique(np.linspace(0, len(t) - 1, min(len(t), 6)).astype(int))
         ts = t[picks]
         got = self.columns(ts, wanted)
         mo = self.motion
@@ -309,6 +309,15 @@ class ClosedMotion:
                         worst[name] = max(worst.get(name, 0.0), diff)
         chosen = [worst[n] for n in wanted if n in worst]
         return (max(chosen) if chosen else 0.0), worst
+
+    @functools.cached_property
+    def _g_mp(self) -> tuple:
+        """g and g' as mpmath functions."""
+        import sympy as sp
+
+        g = self.found.u_of_q
+        qs = next(iter(g.free_symbols))
+        return sp.lambdify(qs, g, "mpmath"), sp.lambdify(qs, sp.diff(g, qs), "mpmath")
 
     def _q_mp(self, v, sn, cn, dn, u, q_double: float) -> tuple:
         mp = _mp()
@@ -341,13 +350,8 @@ class ClosedMotion:
                 f, df = x, mp.mpf(1)
             return (mp.mpf(self.q_fold) + self.eps * shape.scale * f,
                     self.eps * shape.scale * df * sig_dot / mp.sqrt(2))
-        # away from folds g' ≠ 0: one Newton step from the double q on its branch
-        import sympy as sp
-
-        g = self.found.u_of_q
-        qs = next(iter(g.free_symbols))
-        gl = sp.lambdify(qs, g, "mpmath")
-        dgl = sp.lambdify(qs, sp.diff(g, qs), "mpmath")
+        # away from folds g' ≠ 0: Newton steps from the double q on its branch
+        gl, dgl = self._g_mp
         q = mp.mpf(q_double)
         for _ in range(2):
             q = q - (gl(q) - u) / dgl(q)

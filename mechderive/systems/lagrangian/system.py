@@ -258,7 +258,7 @@ class LagrangianSystem(System):
         return Solved({q: columns[q] for q in wanted}, info, traj)
 
     def _exact(self, scene: "Scene", t: "np.ndarray") -> Solved:
-        """The closed form's columns and its measured estimate (doubles against 40 digits at sampled times).
+        """The closed form's columns and its measured estimate (doubles against 30 digits at sampled times).
 
         The conserved quantities are evaluated on the closed form's state (they need q, q̇ and each ċ = R_c(u),
         not the cyclic angles, so no Π is built for them): the report's drift is the closed form's own residual.
@@ -300,8 +300,8 @@ class LagrangianSystem(System):
             out.update({e: v for e, v in zip(expr_names, vals) if e in wanted})
         info = {
             "error_estimate": estimate,
-            "error_estimate_kind": ("absolute, in the outputs' units: the doubles against a 40-digit evaluation of "
-                                    "the same closed form at up to 9 of the times (the last included)"),
+            "error_estimate_kind": ("absolute, in the outputs' units: the doubles against an evaluation of "
+                                    "the same closed form at 30 digits at up to 6 of the times (the last included)"),
             "closed_form": motion.describe(),
             "per_column_estimate": per_column,
             "cyclic_coordinates": list(eq.cyclic),
