@@ -41,7 +41,7 @@ from .simplify import trig_normal
 
 __all__ = ["Quadrature", "Substitution", "Oscillation", "NoQuadrature", "NoSubstitution", "SUBSTITUTIONS",
            "reduce_to_quadrature", "find_substitution", "oscillation", "MAX_DEGREE", "Shape", "SHAPES",
-           "cyclic_rates"]
+           "cyclic_rates", "without_time_gauge"]
 
 #: the largest degree of u̇² = P(u) solved by elliptic functions
 MAX_DEGREE = 4
@@ -419,3 +419,60 @@ def cyclic_rates(model: LagrangianModel, substitution: Substitution) -> dict:
             continue
         out[name] = (N, D)
     return out
+
+
+# --- explicit time that is only a gauge ----------------------------------------------------------------
+
+def without_time_gauge(model: LagrangianModel) -> tuple[LagrangianModel, sp.Expr]:
+    """(model', G): L' = L − dG(q, t)/dt − h(t), free of t, with the same equations of motion; raises
+    :class:`NoQuadrature` where the explicit time is not of that form.
+
+    The explicit time of a Lagrangian written in an accelerating frame's coordinates is often a total
+    derivative: the Lagrange top whose pivot rises as z_P = a t²/2 has, in the inertial frame,
+    L = T_P + ½M(at)² − M a t l sin θ θ̇ − M g (a t²/2 + l cos θ), and −M a t l sin θ θ̇ = d/dt(M a t l cos θ)
+    − M a l cos θ: L' = T_P − M (g + a) l cos θ, the same top in a stronger gravity.  The t-dependent part
+    must be Σ A_i(q, t) q̇_i + B(q, t) with ∂A_i/∂q_j symmetric; G = ∫ A dq is found by integrating A_i in
+    q_i in turn and checked exactly.
+
+    >>> import sympy as sp
+    >>> from mechderive.core.symbols import coordinate, t
+    >>> a, g = sp.symbols("a g", positive=True)
+    >>> z = coordinate("z")
+    >>> L = z.diff(t)**2 / 2 + a * t * z.diff(t) - g * z
+    >>> reduced, G = without_time_gauge(LagrangianModel(L, [z]))
+    >>> sp.expand(reduced.state_lagrangian)
+    -a*z - g*z + z_dot**2/2
+    """
+    from .lagrangian import from_state_symbols
+    from .simplify import is_zero
+
+    L = sp.expand(model.state_lagrangian)
+    times = [s for s in L.free_symbols if s.name == "t"]
+    if not times:
+        return model, sp.Integer(0)
+    T = times[0]
+    positions, velocities = model.positions, model.velocities
+    timed = sp.Add(*[term for term in sp.Add.make_args(L) if term.has(T)])
+    try:
+        poly = sp.Poly(timed, *velocities)
+    except sp.PolynomialError:
+        poly = None
+    if poly is None or poly.total_degree() > 1:
+        raise NoQuadrature(f"expected the explicit time of L in terms at most linear in the velocities (a gauge), "
+                           f"got {timed}")
+    A = [poly.coeff_monomial(v) for v in velocities]
+    G = sp.Integer(0)
+    for q, a_q in zip(positions, A):
+        rest = sp.expand(a_q - sp.diff(G, q))
+        if rest != 0:
+            G = G + sp.integrate(rest, q)
+    if not all(is_zero(sp.diff(G, q) - a_q) for q, a_q in zip(positions, A)):
+        raise NoQuadrature(f"expected the velocity terms with t a total derivative dG/dt, got {sp.Add(*[a * v for a, v in zip(A, velocities)])} "
+                           "(not the gradient of any G(q, t))")
+    reduced = sp.expand(L - sum(a_q * v for a_q, v in zip(A, velocities)) - sp.diff(G, T))
+    # h(t): terms with no coordinate or velocity change no equation of motion
+    kept = [term for term in sp.Add.make_args(reduced) if term.has(*positions, *velocities)]
+    reduced = sp.Add(*kept)
+    if reduced.has(T):
+        raise NoQuadrature(f"expected L − dG/dt free of t, got {reduced} (a time dependence that is not a gauge)")
+    return LagrangianModel(from_state_symbols(reduced, model.coordinates), list(model.coordinates)), G

@@ -60,7 +60,7 @@ class ExactRun:
 class ClosedMotion:
     """The closed form of one motion of a ``lagrangian`` system (see the module docstring)."""
 
-    def __init__(self, system: Any, parameters: dict, initial: dict) -> None:
+    def __init__(self, system: Any, parameters: dict, initial: dict, energy_shift: float = 0.0) -> None:
         import sympy as sp
 
         from ...core.quadrature import SHAPES
@@ -71,8 +71,7 @@ class ClosedMotion:
         if found is None:
             raise OutOfReach(f"no closed form: {reason}")
         self.found = found
-        eq = system.equations
-        model = eq.lagrangian_model
+        model = system.reduced_model()
         d = system.definition
         self.names = tuple(d.coordinates)
         self.remaining = model.remaining_coordinates[0].func.__name__
@@ -83,6 +82,11 @@ class ClosedMotion:
         mp = _mp()
         with mp.workdps(DPS):
             values = self._constants(model, parameters, initial)
+            if energy_shift:
+                # the period's and turning points' sensitivity to E's rounding (an estimate, not the motion)
+                for sym in values:
+                    if sym.name == "E":
+                        values[sym] = values[sym] + sp.Float(energy_shift, 60)
             self.values = values
             coeffs = [self._number(c) for c in found.polynomial.all_coeffs()]
             q0, qd0 = float(initial[self.remaining]), float(initial[self.remaining + "_dot"])
@@ -202,6 +206,25 @@ class ClosedMotion:
         return {"substitution": self.found.name, "degree": self.found.degree, "motion": self.kind,
                 "interval": [float(x) for x in mo.interval], "m": float(mo.m), "kappa": float(mo.kappa),
                 "period": float(self.period)}
+
+    def summary(self, name: str) -> float:
+        """``<q>_min``, ``<q>_max`` (the turning points of q; the fold's mirror image for a libration through a
+        fold) or ``<c>_per_period`` (c's advance over one period of q)."""
+        if name.endswith("_per_period"):
+            integral, _, _ = self.rate(name[: -len("_per_period")])
+            return float(integral.advance * (2 if self.kind == "libration through a fold" else 1))
+        if self.kind in ("rotation", "unbounded"):
+            raise OutOfReach(f"{name}: q is not bounded on this motion ({self.kind})")
+        a, b = (float(x) for x in self.motion.interval)
+        if self.kind == "libration through a fold":
+            other = a if self.end == "b" else b
+            reach = abs(float(self.shape.inverse(np.array(other), self.q0)) - self.q_fold)
+            if self.shape.folds and self.shape.fold_point(other, self.q0) is not None:
+                reach = float(self.shape.scale * np.pi / 2)  # both ends folds: handled as a rotation
+            ends = (self.q_fold - reach, self.q_fold + reach)
+        else:
+            ends = tuple(sorted(float(self.shape.inverse(np.array(x), self.q0)) for x in (a, b)))
+        return ends[0] if name.endswith("_min") else ends[1]
 
     # --- evaluation ---------------------------------------------------------------------------------
 
@@ -359,7 +382,7 @@ class ClosedMotion:
         return q, u_dot / dgl(q)
 
 
-def closed_motion(system: Any, parameters: dict, initial: dict) -> ClosedMotion:
-    """The :class:`ClosedMotion` of ``system`` from this start; raises :class:`OutOfReach` with the reason where
-    the recipe does not apply."""
-    return ClosedMotion(system, parameters, initial)
+def closed_motion(system: Any, parameters: dict, initial: dict, energy_shift: float = 0.0) -> ClosedMotion:
+    """The :class:`ClosedMotion` of ``system`` from this start (E moved by ``energy_shift`` for a sensitivity);
+    raises :class:`OutOfReach` with the reason where the recipe does not apply."""
+    return ClosedMotion(system, parameters, initial, energy_shift)

@@ -103,7 +103,16 @@ class LagrangianSystem(System):
             + tuple(Quantity(n, "", f"output expression {n}") for n, _ in d.expressions))
         from ..summaries import REDUCED_PERIOD, invariant_quantities
 
-        self.summaries = (REDUCED_PERIOD,) + invariant_quantities(
+        reduced: tuple = ()
+        remaining = [q for q in d.coordinates if q not in eq.cyclic]
+        if len(remaining) == 1 and not d.uses_time:
+            q = remaining[0]
+            reduced = (Quantity(f"{q}_min", "", f"smallest {q} of the motion (closed form: a turning point, from "
+                                "the roots of P(u)); none for a rotation or where L does not reduce"),
+                       Quantity(f"{q}_max", "", f"largest {q} of the motion (closed form, as {q}_min)"),
+                       *(Quantity(f"{c}_per_period", "", f"advance of the cyclic coordinate {c} over one period of "
+                                  f"the reduced motion (closed form: complete Π integrals)") for c in eq.cyclic))
+        self.summaries = (REDUCED_PERIOD,) + reduced + invariant_quantities(
             {n: ("", "Jacobi integral h" if n == "energy" else f"momentum of the cyclic coordinate {n[2:]}", "")
              for n in eq.conserved_names})
 
@@ -279,7 +288,7 @@ class LagrangianSystem(System):
         names = [*d.coordinates, *(q + "_dot" for q in d.coordinates)]
         # a cyclic angle nobody asked for stays at its start: the invariants do not depend on it
         y = np.column_stack([np.broadcast_to(cols[n] if n in cols else float(scene.initial[n]), t.shape)
-                             for n in names])
+                             for n in names] + ([t] if d.uses_time else []))
         p = [scene.parameters[n] for n in d.dynamics_parameters]
         run = ExactRun(t, y, eq.term.invariant_names, eq.term.invariant_function()(*p, *y.T))
         # the closed form checks itself: its angles against its rates, its invariants against their start
@@ -291,6 +300,10 @@ class LagrangianSystem(System):
                 failed = failed or f"{name} drifts by {moved:.3g} (of {scale:.3g}) on it"
         if failed:
             raise OutOfReach(f"the closed form ({motion.found.name}, {motion.kind}) failed its own check: {failed}")
+        if scene.method == "auto" and not estimate <= scene.rtol * max(1.0, _largest(cols, wanted)):
+            # ill-conditioned here (e.g. a rate's pole just outside the motion): integration can do better
+            raise OutOfReach(f"the closed form's estimate {estimate:.2g} exceeds rtol {scene.rtol:g} (ill-conditioned "
+                             f"for this motion)")
         out = {k: np.ascontiguousarray(cols[k], dtype=float) for k in wanted if k in cols}
         for q in wanted:
             if q in run.invariant_names:
@@ -388,7 +401,11 @@ class LagrangianSystem(System):
         from ..summaries import invariants_of, period_of
 
         drifts = self.drift(scene, solved, t)
-        out = invariants_of(drifts, tuple(n for n in names if n != "period"), "the Lagrangian depends on t")
+        reduced = {q.name for q in self.summaries[1:] if q.name.endswith(("_min", "_max", "_per_period"))}
+        out = invariants_of(drifts, tuple(n for n in names if n != "period" and n not in reduced),
+                            "the Lagrangian depends on t")
+        if reduced & set(names):
+            out.update(self._closed_summaries(scene, drifts, [n for n in names if n in reduced]))
         if "period" in names:
             traj, n = solved.solution, len(self.definition.coordinates)
             keep = [i for i, q in enumerate(self.definition.coordinates) if q not in self.equations.cyclic]
@@ -412,22 +429,29 @@ class LagrangianSystem(System):
             from ...core.quadrature import NoQuadrature, NoSubstitution, find_substitution, reduce_to_quadrature
             from ...errors import DerivationError
 
-            if self.definition.uses_time:
-                self.__dict__["_found"] = (None, "the Lagrangian depends on t explicitly")
-            else:
-                try:
-                    self.__dict__["_found"] = (find_substitution(reduce_to_quadrature(self.equations.lagrangian_model)),
-                                               None)
-                except (NoQuadrature, NoSubstitution, DerivationError) as exc:
-                    self.__dict__["_found"] = (None, str(exc))
+            try:
+                self.__dict__["_found"] = (find_substitution(reduce_to_quadrature(self.reduced_model())), None)
+            except (NoQuadrature, NoSubstitution, DerivationError) as exc:
+                self.__dict__["_found"] = (None, str(exc))
         return self.__dict__["_found"]
+
+    def reduced_model(self) -> Any:
+        """The :class:`~mechderive.core.lagrangian.LagrangianModel` the closed form reduces: L itself, or, where L
+        depends on t only through a total derivative dG(q, t)/dt (an accelerating frame's gauge), L − dG/dt
+        (:func:`~mechderive.core.quadrature.without_time_gauge`; raises its reason otherwise)."""
+        if "_reduced_model" not in self.__dict__:
+            from ...core.quadrature import without_time_gauge
+
+            model = self.equations.lagrangian_model
+            self.__dict__["_reduced_model"] = without_time_gauge(model)[0] if self.definition.uses_time else model
+        return self.__dict__["_reduced_model"]
 
     def cyclic_rates(self) -> dict:
         """{cyclic coordinate: (N, D) or the reason}: ċ = N(u)/D(u) (:func:`mechderive.core.quadrature.cyclic_rates`)."""
         if "_rates" not in self.__dict__:
             from ...core.quadrature import cyclic_rates
 
-            self.__dict__["_rates"] = cyclic_rates(self.equations.lagrangian_model, self.reduction()[0])
+            self.__dict__["_rates"] = cyclic_rates(self.reduced_model(), self.reduction()[0])
         return self.__dict__["_rates"]
 
     def _closed_period(self, scene: "Scene", drifts: dict) -> tuple[Any, Any] | None:
@@ -468,6 +492,28 @@ class LagrangianSystem(System):
         except NoSubstitution as exc:
             return None, f"{exc} ({found.name})"
         return float(base.period), float(abs(moved.period - base.period)) + 2.0**-52 * float(base.period)
+
+    def _closed_summaries(self, scene: "Scene", drifts: dict, names: list[str]) -> dict:
+        """The turning points and per-period advances from the closed form (:mod:`.closed`), each with the change
+        it undergoes when E moves by its evaluation's rounding from the start's doubles (as the period's
+        estimate); (None, the reason) where the motion has no closed form or the quantity does not apply."""
+        from .closed import closed_motion
+
+        try:
+            base = closed_motion(self, dict(scene.parameters), dict(scene.initial))
+            shift = 8 * 2.0**-52 * max(float(drifts["energy"].scale), abs(float(drifts["energy"].start)))
+            moved = closed_motion(self, dict(scene.parameters), dict(scene.initial), energy_shift=shift)
+        except OutOfReach as exc:
+            return {n: (None, str(exc)) for n in names}
+        out = {}
+        for n in names:
+            try:
+                value, other = base.summary(n), moved.summary(n)
+            except OutOfReach as exc:
+                out[n] = (None, str(exc))
+                continue
+            out[n] = (value, abs(other - value) + 2.0**-52 * abs(value))
+        return out
 
     def drift(self, scene: "Scene", solved: Solved, t: "np.ndarray") -> dict[str, "Drift"]:
         """Energy (when ∂L/∂t = 0) and each p_c, each against the largest sum of the sizes of its terms."""
@@ -635,6 +681,14 @@ class LagrangianFamily(System):
 
 
 SYSTEM = LagrangianFamily()
+
+
+def _largest(columns: dict, names: Sequence[str]) -> float:
+    """The largest magnitude among the requested columns (the scale an absolute estimate is judged against)."""
+    import numpy as np
+
+    sizes = [float(np.max(np.abs(columns[n]))) for n in names if n in columns and np.size(columns[n])]
+    return max(sizes, default=0.0)
 
 
 def _checked(closed: tuple[Any, Any], measured: tuple[Any, Any]) -> tuple[Any, Any]:
