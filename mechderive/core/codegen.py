@@ -189,6 +189,24 @@ def _numpy_printer_class() -> type:
         def _print_Min(self, expr: sp.Expr) -> str:
             return self._fold(expr, "minimum")
 
+        # Legendre's elliptic integrals (the closed forms' F(φ|m), E(φ|m), Π(n; φ|m)): mechderive's own,
+        # vectorised and valid for every real φ (SciPy has no incomplete Π); the function imports them
+        def _print_elliptic_f(self, expr: sp.Expr) -> str:
+            return "mechderive.special.elliptic_f({}, {})".format(*map(self._print, expr.args))
+
+        def _print_elliptic_e(self, expr: sp.Expr) -> str:
+            if len(expr.args) == 1:
+                return "mechderive.special.elliptic_e({})".format(self._print(expr.args[0]))
+            return "mechderive.special.elliptic_e_incomplete({}, {})".format(*map(self._print, expr.args))
+
+        def _print_elliptic_k(self, expr: sp.Expr) -> str:
+            return "mechderive.special.ellipk_m1(1 - ({}))".format(self._print(expr.args[0]))
+
+        def _print_elliptic_pi(self, expr: sp.Expr) -> str:
+            if len(expr.args) == 2:
+                return "mechderive.special.elliptic_pi({}, {})".format(*map(self._print, expr.args))
+            return "mechderive.special.elliptic_pi_incomplete({}, {}, {})".format(*map(self._print, expr.args))
+
     return _Printer
 
 
@@ -217,6 +235,8 @@ def to_python_source(exprs: Any, args: Sequence[Any] | None = None, name: str = 
     repl, reduced = sp.cse([e.xreplace(plain) for e in flat], symbols=sp.numbered_symbols("_x"))
     printer = _NumPyPrinter({"fully_qualified_modules": True, "allow_unknown_functions": False})
     body = [f"    {s} = {printer.doprint(e)}" for s, e in repl]
+    if any(e.has(sp.elliptic_f, sp.elliptic_e, sp.elliptic_k, sp.elliptic_pi) for e in flat):
+        body.insert(0, "    import mechderive.special")
     entries = [printer.doprint(e) for e in reduced]
     if shape:
         body.append("    _values = numpy.broadcast_arrays(" +

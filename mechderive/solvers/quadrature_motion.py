@@ -24,10 +24,13 @@ c_j) are computed at 40 digits with mpmath and rounded once; the functions are t
 NumPy by :mod:`mechderive.special` (phase reduced by 4K in double-double, so long times keep their
 digits).
 
+A start on a double root u_s of P with P''(u_s) < 0 is a steady motion: u ≡ u_s, and the rates integrate to
+R(u_s)·t (the degenerate M(w) = u_s).
+
 Not covered (the caller integrates instead; :class:`NotElliptic` says why): a quartic with complex
-roots, a cubic with one real root, an unbounded quadratic, degree ≤ 1, a start on a double root
-(steady motion, separatrix), and rates with complex poles, poles on the motion, or a polynomial part
-of degree > 1 in w.
+roots, a cubic with one real root, an unbounded quadratic, degree ≤ 1, a separatrix (a double root at
+an end of the motion, m = 1) or an unstable equilibrium, and rates with complex poles, poles on the
+motion, or a polynomial part of degree > 1 in w.
 """
 
 from __future__ import annotations
@@ -84,6 +87,8 @@ class EllipticMotion:
     K: Any
     u_period: Any
     degree: int
+    #: u ≡ a double root of P (a stable steady motion): u and its distances are constant
+    steady: bool = False
     _f: dict = field(default_factory=dict, repr=False)
 
     # --- the phase ---------------------------------------------------------------------------
@@ -238,8 +243,21 @@ def elliptic_motion(coefficients: Sequence, u0: Any, direction: int) -> Elliptic
         if degree == 4 and len(roots) < 4 or degree == 3 and len(roots) < 3 or degree == 2 and len(roots) < 2:
             raise NotElliptic(f"expected {degree} real roots of P (degree {degree}), got {len(roots)}: a "
                               "configuration with complex roots, not covered by this closed form")
-        if any(abs(x - y) <= mp.mpf(10) ** (-DPS // 2) * (1 + abs(x)) for x, y in zip(roots, roots[1:])):
-            raise NotElliptic("expected simple roots of P, got a double root: a steady motion or a separatrix")
+        close = [(x, y) for x, y in zip(roots, roots[1:]) if abs(x - y) <= mp.mpf(10) ** (-DPS // 2) * (1 + abs(x))]
+        if close:
+            x, y = close[0]
+            double = (x + y) / 2
+            curvature = mp.polyval([ci * (degree - i) * (degree - i - 1) for i, ci in enumerate(c[:-2])], double)
+            if abs(u0 - double) <= mp.mpf(2) ** -40 * (1 + abs(u0)) and curvature < 0:
+                return _steady(c, degree, double, curvature)
+            raise NotElliptic("expected simple roots of P, got a double root at u = "
+                              f"{mp.nstr(double, 10)} that the motion "
+                              + ("starts on: an unstable equilibrium (the separatrix's end), not periodic"
+                                 if abs(u0 - double) <= mp.mpf(2) ** -40 * (1 + abs(u0)) else
+                                 "approaches: a separatrix (m = 1), not periodic"))
+        if degree == 2 and c[0] > 0:
+            raise NotElliptic("expected a bounded quadratic (negative leading coefficient), got an unbounded one: "
+                              "hyperbolic motion, not periodic")
         # the branch points in the cyclic order of the projective line; ∞ is one when the degree is odd
         points = list(roots) + ([mp.inf] if degree % 2 else [])
         slack = mp.mpf(2) ** -40 * (1 + abs(u0))
@@ -294,11 +312,25 @@ def elliptic_motion(coefficients: Sequence, u0: Any, direction: int) -> Elliptic
             deriv = det / (C + D * w) ** 2
             return P((A + B * w) / (C + D * w)) / (4 * deriv**2 * w * (1 - w) * (1 - m * w))
 
-        k2 = kappa_sq(mp.mpf(1) / 2)
-        check = kappa_sq(mp.mpf(3) / 10)
-        if not k2 > 0 or abs(check - k2) > mp.mpf(10) ** (-DPS // 2) * abs(k2):
-            raise NotElliptic("expected the substitution w = sn² to fit u̇² = P(u) (κ² constant), got "
-                              f"{mp.nstr(k2, 8)} and {mp.nstr(check, 8)}: an inconsistent root configuration")
+        # κ² from the roots (no cancellation, even for nearly double roots): the ratio of the two sides of
+        # u̇² = P(u) under u = M(w), checked against that ratio evaluated at two w (a wrong configuration is O(1) off)
+        if degree == 2:
+            k2 = -c[0] / 4
+        elif degree == 3:
+            # the quartic's −lead₄(c − a)(d − b)/4 with one branch point X → ∞ and lead₃ = −lead₄ X
+            k2 = (c[0] * (cc - a) / 4 if mp.isinf(d) else -c[0] * (cc - a) / 4 if mp.isinf(b) else
+                  -c[0] * (d - b) / 4 if mp.isinf(a) else c[0] * (d - b) / 4)
+        else:
+            k2 = -c[0] * (cc - a) * (d - b) / 4
+        # the evaluation through P cancels to ~10^-DPS of its terms, i.e. relative (10^-DPS/(b − a))² near a double
+        # root; a wrong configuration is off by O(1) whatever the tolerance
+        width = abs(b - a) if not (mp.isinf(a) or mp.isinf(b)) else mp.mpf(1)
+        tolerance = mp.mpf(10) ** -8 + mp.mpf(10) ** (-DPS + 2) * (1 + abs(a if not mp.isinf(a) else b)) ** 2 / width**2
+        for w_check in (mp.mpf(1) / 2, mp.mpf(3) / 10):
+            check = kappa_sq(w_check)
+            if not k2 > 0 or abs(check - k2) > tolerance * abs(k2):
+                raise NotElliptic("expected the substitution w = sn² to fit u̇² = P(u) (κ² constant), got "
+                                  f"{mp.nstr(k2, 8)} and {mp.nstr(check, 8)}: an inconsistent root configuration")
         kappa = mp.sqrt(k2)
         m1 = 1 - m
         K = mp.ellipk(m)
@@ -308,7 +340,23 @@ def elliptic_motion(coefficients: Sequence, u0: Any, direction: int) -> Elliptic
         v0 = mp.ellipf(mp.asin(mp.sqrt(w0)), m)
         w_direction = direction * (1 if det / (C + D * w0) ** 2 > 0 else -1)
         v_start = -v0 if w_direction < 0 else v0
+        if direction == 0:
+            # u̇(0) = 0: u starts at a turning point (q̇ = 0, or q on a fold of g), whatever rounding put u0
+            # a hair inside the interval (√ of it would shift the phase by ~1e-8)
+            v_start = mp.mpf(0) if w0 <= mp.mpf(1) / 2 else K
         return EllipticMotion(tuple(c), (a, b), (a, b, cc, d), mob, m, m1, kappa, v_start, K, 2 * K / kappa, degree)
+
+
+def _steady(c: list, degree: int, double: Any, curvature: Any) -> EllipticMotion:
+    """u(t) ≡ the double root u_s of P where the motion starts on it with P''(u_s) < 0 (a stable steady motion:
+    uniform precession, a conical pendulum): the degenerate M(w) = u_s, m = 0, and κ² = −P''(u_s)/8, the limit of
+    κ² as the two roots merge, so that u_period = π/κ is the period of small oscillations about it."""
+    mp = _mp()
+    kappa = mp.sqrt(-curvature / 8)
+    K = mp.pi / 2
+    return EllipticMotion(tuple(c), (double, double), (double, double, mp.inf, mp.inf), (double, mp.mpf(0),
+                          mp.mpf(1), mp.mpf(0)), mp.mpf(0), mp.mpf(1), kappa, mp.mpf(0), K, 2 * K / kappa, degree,
+                          steady=True)
 
 
 # --- ∫ R(u(t)) dt for a rational R ---------------------------------------------------------------

@@ -33,7 +33,7 @@ import numpy as np
 
 from ..base import OutOfReach
 
-__all__ = ["ClosedMotion", "ExactRun", "closed_motion"]
+__all__ = ["ClosedMotion", "ExactRun", "closed_motion", "closed_orbit"]
 
 
 def _mp():
@@ -60,22 +60,26 @@ class ExactRun:
 class ClosedMotion:
     """The closed form of one motion of a ``lagrangian`` system (see the module docstring)."""
 
-    def __init__(self, system: Any, parameters: dict, initial: dict, energy_shift: float = 0.0) -> None:
+    def __init__(self, system: Any, parameters: dict, initial: dict, energy_shift: float = 0.0,
+                 along: str | None = None) -> None:
         import sympy as sp
 
         from ...core.quadrature import SHAPES
         from ...solvers.quadrature_motion import DPS, NotElliptic, elliptic_motion
 
         self.system = system
-        found, reason = system.reduction()
+        found, reason = system.reduction(along)
         if found is None:
             raise OutOfReach(f"no closed form: {reason}")
+        #: the independent variable: "t", or the cyclic coordinate an orbit is measured along (then the times
+        #: given to :meth:`columns` are that coordinate's advance from its start, and q_dot is dq/dc)
+        self.along = along
         self.found = found
         model = system.reduced_model()
         d = system.definition
         self.names = tuple(d.coordinates)
         self.remaining = model.remaining_coordinates[0].func.__name__
-        self.cyclic = tuple(c.func.__name__ for c in model.cyclic_coordinates)
+        self.cyclic = tuple(c.func.__name__ for c in model.cyclic_coordinates if c.func.__name__ != along)
         self.parameters = dict(parameters)
         self.initial = dict(initial)
         self.shape = SHAPES[found.name]
@@ -94,6 +98,11 @@ class ClosedMotion:
             qsym = next(iter(g.free_symbols))
             u0 = self._number(g.subs(qsym, sp.Float(q0, 60)))
             slope = float(self._number(sp.diff(g, qsym).subs(qsym, sp.Float(q0, 60))))
+        if along is not None:
+            along_rate = float(initial[along + "_dot"])
+            if along_rate == 0:
+                raise OutOfReach(f"no orbit along {along}: d{along}/dt = 0 at the start")
+            qd0 = qd0 / along_rate  # dq/dc
         direction = int(np.sign(qd0 * slope))
         try:
             motion = elliptic_motion(coeffs, u0, direction)
@@ -109,6 +118,8 @@ class ClosedMotion:
                                                   for u_e, _, _ in self.shape.folds)
             ends.append(end if exact_fold else None)
         folds = [e for e in ends if e]
+        if motion.steady:
+            folds = []
         if len(folds) == 2:
             if motion.mobius[3] != 0:
                 raise OutOfReach(f"a rotation through both folds of {found.name} with a quartic P: not covered")
@@ -124,8 +135,13 @@ class ClosedMotion:
             self.end = folds[0]
             value = float(a if self.end == "a" else b)
             self.q_fold = self.shape.fold_point(value, q0)
+        elif motion.steady:
+            self.kind = "steady"
         else:
             self.kind = "oscillation between turning points" if np.isfinite(float(b)) else "unbounded"
+        if found.name == "u = 1/q" and float(min(a, b)) <= 0 <= float(max(a, b)):
+            # u = 1/q passes 0: q escapes to ±∞ there (Kepler's hyperbola along φ); past it u has no meaning
+            self.kind = "unbounded: q → ∞ where u = 1/q reaches 0"
         self.motion = motion
         if self.kind == "libration through a fold":
             sigma, sigma_dot = motion.signed_root(self.end, np.zeros(1))
@@ -231,6 +247,8 @@ class ClosedMotion:
     def _q(self, t: np.ndarray, jac: tuple) -> tuple[np.ndarray, np.ndarray]:
         """(q, q̇) in doubles."""
         mo, shape = self.motion, self.shape
+        if self.kind == "steady":
+            return np.full(t.shape, self.q0), np.zeros(t.shape)
         if self.kind == "rotation":
             am = mo.amplitude(t)
             return (self.q_fold + self.S * shape.scale * am,
@@ -247,6 +265,11 @@ class ClosedMotion:
             return (self.q_fold + self.eps * shape.scale * f,
                     self.eps * shape.scale * df * sigma_dot / np.sqrt(2.0))
         u = mo.u(t, jac)
+        if self.kind.startswith("unbounded: q"):
+            past = np.sign(u) != np.sign(float(self.motion.u_mp(0.0)))
+            if np.any(past):
+                raise OutOfReach(f"{self.remaining} escapes to infinity (u = 1/{self.remaining} reaches 0) before "
+                                 f"{'t' if self.along is None else self.along} = {float(np.asarray(t)[past][0]):.6g}")
         q = shape.inverse(u, self.q0)
         with np.errstate(all="ignore"):
             qd = mo.u_dot(t, jac) / shape.dg(q)
@@ -351,6 +374,8 @@ class ClosedMotion:
         A, B, C, D = mo.mobius
         det = B * C - A * D
         w = sn * sn
+        if self.kind == "steady":
+            return mp.mpf(self.q0), mp.mpf(0)
         if self.kind == "rotation":
             return (mp.mpf(self.q_fold) + self.S * shape.scale * _am_mp(v, mo.m),
                     self.S * shape.scale * kap * dn)
@@ -382,7 +407,81 @@ class ClosedMotion:
         return q, u_dot / dgl(q)
 
 
+def closed_orbit(system: Any, along: str, parameters: dict, initial: dict) -> ClosedMotion:
+    """The orbit q(c) along the cyclic coordinate ``along`` (Binet's u = 1/r for a central force, where the motion
+    in t has no elliptic closed form): a :class:`ClosedMotion` whose :meth:`~ClosedMotion.columns` take c − c(0)
+    in place of t."""
+    return ClosedMotion(system, parameters, initial, along=along)
+
+
 def closed_motion(system: Any, parameters: dict, initial: dict, energy_shift: float = 0.0) -> ClosedMotion:
     """The :class:`ClosedMotion` of ``system`` from this start (E moved by ``energy_shift`` for a sensitivity);
     raises :class:`OutOfReach` with the reason where the recipe does not apply."""
     return ClosedMotion(system, parameters, initial, energy_shift)
+
+
+# --- the solution as formulas (``mechderive derive SCENE closed_form_…``) --------------------------------
+
+def solution_formulas(system: Any) -> dict:
+    """{name: (lhs, value, meaning)}: the closed form as formulas in the roots of P (symbols u_a, u_b, u_c, …),
+    the amplitude χ (sin²χ = sn²(κ(t − t₀)|m)) and the constants — ``u`` (u(χ)), ``m``, ``kappa``, ``t`` (t − t₀
+    as F(χ|m)/κ) and, for each cyclic coordinate c, ``c`` (c − c₀ by partial fractions and Π).
+
+    The labels: u moves between the adjacent roots u_a and u_b (χ = 0 at u_a), u_c is the next root of P past
+    u_b (and u_d the one after, for a quartic) — any such labelling of a motion's roots gives the same motion.
+    Raises :class:`OutOfReach` with the reason where the system has no reduction.
+    """
+    import sympy as sp
+
+    found, reason = system.reduction()
+    if found is None:
+        raise OutOfReach(f"no closed form: {reason}")
+    u = found.variable
+    P = found.polynomial
+    deg = found.degree
+    chi, chi0 = sp.Symbol("chi", real=True), sp.Symbol("chi_0", real=True)
+    ua, ub, uc, ud = sp.symbols("u_a u_b u_c u_d", real=True)
+    lead = P.LC()
+    w = sp.sin(chi) ** 2
+    where = ("u_a, u_b: the roots of P(u) the motion lies between (χ = 0 at u_a); u_c: the next root past u_b"
+             + (", u_d the one after" if deg == 4 else ""))
+    if deg == 2:
+        m, kappa2, u_of = sp.Integer(0), -lead / 4, ua + (ub - ua) * w
+    elif deg == 3:
+        m, kappa2, u_of = (ub - ua) / (uc - ua), lead * (uc - ua) / 4, ua + (ub - ua) * w
+    else:
+        m = (ub - ua) * (ud - uc) / ((ud - ub) * (uc - ua))
+        kappa2 = -lead * (uc - ua) * (ud - ub) / 4
+        u_of = (ua * (ud - ub) + ud * (ub - ua) * w) / ((ud - ub) + (ub - ua) * w)
+    kappa = sp.sqrt(kappa2)
+    out = {
+        "u": (sp.Symbol(str(u)), u_of, f"u = {found.name[4:]} along the motion, as a function of the amplitude χ; "
+              + where),
+        "m": (sp.Symbol("k") ** 2, m, "the parameter m = k² of the Jacobi functions: the cross-ratio of the roots"),
+        "kappa": (sp.Symbol("kappa"), kappa, "the rate κ of the Jacobi argument v = κ (t − t₀)"),
+        "t": (sp.Symbol("t") - sp.Symbol("t_0"), (sp.elliptic_f(chi, m) - sp.elliptic_f(chi0, m)) / kappa,
+              "the time from the amplitude χ₀ to χ (v = F(χ|m), sin χ = sn v)"),
+    }
+    if deg == 4:
+        return out
+    for name, entry in system.cyclic_rates().items():
+        if isinstance(entry, str):
+            continue
+        N, D = entry
+        quotient, rest = sp.div(N, D)
+        if quotient.degree() > 0:
+            continue
+        poles = sp.roots(D.as_expr(), u)
+        if sum(poles.values()) != D.degree() or any(k > 1 for k in poles.values()):
+            continue
+        dD = D.as_expr().diff(u)
+        total = quotient.as_expr() * (sp.elliptic_f(chi, m) - sp.elliptic_f(chi0, m))
+        for p in poles:
+            residue = sp.factor(sp.cancel((rest.as_expr() / dD).subs(u, p)))
+            n = (ub - ua) / (p - ua)
+            total += residue / (ua - p) * (sp.elliptic_pi(n, chi, m) - sp.elliptic_pi(n, chi0, m))
+        c = sp.Symbol(name)
+        out[name] = (c - sp.Symbol(f"{name}_0"), total / kappa,
+                     f"d{name}/dt = {sp.sstr(sp.factor(N.as_expr() / D.as_expr()))} in partial fractions over its "
+                     f"poles in u, integrated with Π(n; χ|m), n = (u_b − u_a)/(u_pole − u_a)")
+    return out

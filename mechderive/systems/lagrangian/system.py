@@ -423,17 +423,19 @@ class LagrangianSystem(System):
         """The reduction to u̇² = P(u) (:mod:`mechderive.core.quadrature`), or None where there is none (cached)."""
         return self.reduction()[0]
 
-    def reduction(self) -> tuple[Any, str | None]:
-        """(substitution, None), or (None, the reason there is none): the reduction to u̇² = P(u) (cached)."""
-        if "_found" not in self.__dict__:
+    def reduction(self, along: str | None = None) -> tuple[Any, str | None]:
+        """(substitution, None), or (None, the reason there is none): the reduction to u̇² = P(u), or with ``along``
+        (a cyclic coordinate c) to the orbit's (du/dc)² = P(u) (cached)."""
+        key = "_found" if along is None else f"_found_{along}"
+        if key not in self.__dict__:
             from ...core.quadrature import NoQuadrature, NoSubstitution, find_substitution, reduce_to_quadrature
             from ...errors import DerivationError
 
             try:
-                self.__dict__["_found"] = (find_substitution(reduce_to_quadrature(self.reduced_model())), None)
+                self.__dict__[key] = (find_substitution(reduce_to_quadrature(self.reduced_model(), along)), None)
             except (NoQuadrature, NoSubstitution, DerivationError) as exc:
-                self.__dict__["_found"] = (None, str(exc))
-        return self.__dict__["_found"]
+                self.__dict__[key] = (None, str(exc))
+        return self.__dict__[key]
 
     def reduced_model(self) -> Any:
         """The :class:`~mechderive.core.lagrangian.LagrangianModel` the closed form reduces: L itself, or, where L
@@ -560,21 +562,55 @@ class LagrangianSystem(System):
             Derivation("closed_form", "the reduction by the cyclic coordinates to u̇² = P(u), P a polynomial of degree "
                        "≤ 4 in the substitution u = g(q) found (elliptic functions solve it)", "(3.73) for the heavy top",
                        lambda _: self._reduction()[1], lhs=lambda: self._reduction()[0]),
+            *self._solution_derivations(),
         )
 
+    def _solution_derivations(self) -> tuple[Derivation, ...]:
+        """closed_form_u, _m, _kappa, _t and closed_form_<c> (:func:`.closed.solution_formulas`): the solution as
+        formulas, built on request (a system without a reduction lists them and says why when asked)."""
+        names = ["u", "m", "kappa", "t", *self.equations.cyclic]
+        meanings = {"u": "u(χ) along the motion between two roots of P (χ the amplitude)",
+                    "m": "the Jacobi parameter m, the roots' cross-ratio", "kappa": "the rate κ of the Jacobi argument",
+                    "t": "t − t₀ = (F(χ|m) − F(χ₀|m))/κ"}
+
+        def formula(name: str, part: int) -> Any:
+            from .closed import solution_formulas
+
+            try:
+                found = solution_formulas(self)
+            except OutOfReach as exc:
+                from ...errors import DerivationError
+
+                raise DerivationError(str(exc)) from exc
+            if name not in found:
+                from ...errors import DerivationError
+
+                raise DerivationError(f"closed_form_{name}: no printable formula (a quartic's rates, a rate that is "
+                                      "not simple partial fractions over its poles, or not a rational function of u)")
+            return found[name][part]
+
+        return tuple(Derivation(f"closed_form_{n}", meanings.get(n, f"{n} − {n}₀ by partial fractions in u and "
+                                                                     "Π(n; χ|m)"), "",
+                                lambda _, n=n: formula(n, 1), lhs=lambda n=n: formula(n, 0)) for n in names)
+
     def _reduction(self) -> Any:
-        """((d g(q)/dt)², P(g(q))): the substitution found and its polynomial, printed as one equation; raises the
-        reason where there is none (:mod:`mechderive.core.quadrature`)."""
+        """((d g(q)/dt)², P(g(q))): the substitution found and its polynomial, printed as one equation (the right
+        side in the plain coordinate symbol, so that code can be generated from it); raises the reason where there
+        is none (:mod:`mechderive.core.quadrature`)."""
         import sympy as sp
 
-        from ...core.quadrature import find_substitution, reduce_to_quadrature
         from ...core.symbols import t as time
+        from ...errors import DerivationError
 
-        model = self.equations.lagrangian_model
-        found = find_substitution(reduce_to_quadrature(model))
+        found, reason = self.reduction()
+        if found is None:
+            raise DerivationError(reason)
+        model = self.reduced_model()
         q = model.remaining_coordinates[0]  # q(t)
         g = found.u_of_q.subs({s: q for s in found.u_of_q.free_symbols})
-        return sp.Derivative(g, time, evaluate=False) ** 2, found.polynomial.as_expr().subs(found.variable, g)
+        plain = model.positions[model.coordinates.index(q)]
+        g_plain = found.u_of_q.subs({s: plain for s in found.u_of_q.free_symbols})
+        return sp.Derivative(g, time, evaluate=False) ** 2, found.polynomial.as_expr().subs(found.variable, g_plain)
 
 
     def check_system(self) -> Any:

@@ -1,0 +1,400 @@
+"""§3.6 generalised (issue 16): the closed form the toolkit finds itself — u(t) = M(sn²(κt + v_s|m)) for any
+real-root configuration of u̇² = P(u), q(t) through folds and rotations, cyclic coordinates by partial fractions
+and Π, ``method = "auto"`` with its reasons, the formulas ``derive`` prints, and the heavy top's hand-built closed
+form (3.76)-(3.78) recovered from its Lagrangian.
+
+References: DOP853 at rtol = atol = 1e-13 of the hand-written second-order equation ü = P'(u)/2 (global error
+≲ 1e-11 over the few periods used, so 1e-9 is a safe bound), SciPy/mpmath quadratures, the integrated scene
+(same rtol), and the hand-built heavy-top closed form (itself tested against 30-digit references in
+test_s3_6_heavy_top_exact.py).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import sympy as sp
+from scipy.integrate import solve_ivp
+
+from mechderive.errors import InvalidInputError
+from mechderive.scenes.planner import run_scene
+from mechderive.scenes.schema import parse_scene
+from mechderive.solvers.quadrature_motion import NotElliptic, elliptic_motion, rate_integral
+
+SPHERICAL = "m*l**2/2*(theta_dot**2 + sin(theta)**2*phi_dot**2) + m*g*l*cos(theta)"
+PENDULUM = "m*l**2/2*theta_dot**2 + m*g*l*cos(theta)"
+TOP = "I1/2*(theta_dot**2 + sin(theta)**2*phi_dot**2) + I3/2*(psi_dot + cos(theta)*phi_dot)**2 - M*g*l*cos(theta)"
+TOP_PARAMETERS = dict(I1=1.0, I3=0.5, M=1.0, g=9.81, l=0.1)
+G = dict(m=1.0, l=1.0, g=9.81)
+
+
+def _scene(coordinates, lagrangian, parameters, initial, *, method="auto", t_end=12.0, samples=601, quantities=None,
+           summary=None, rtol=1e-12):
+    output = {"quantities": quantities or [*coordinates, *(c + "_dot" for c in coordinates), "energy"]}
+    if summary:
+        output["summary"] = summary
+    return parse_scene({"system": "lagrangian", "coordinates": coordinates, "lagrangian": lagrangian,
+                        "parameters": parameters, "initial": initial, "method": method, "rtol": rtol,
+                        "time": {"t_end": t_end, "samples": samples}, "output": output})
+
+
+# --- u(t) for every real-root configuration -----------------------------------------------------------------
+
+def _ode_reference(coeffs, u0, direction, t, rate=None):
+    """u and ∫R(u) dt by DOP853 on ü = P'(u)/2, u̇(0) = ±√P(u0) (the hand-written second-order form)."""
+    P, dP = np.poly1d(coeffs), np.poly1d(coeffs).deriv()
+    v0 = direction * np.sqrt(max(P(u0), 0.0))
+
+    def rhs(_, y):
+        return [y[1], dP(y[0]) / 2, 0.0 if rate is None else rate(y[0])]
+
+    sol = solve_ivp(rhs, (0, t[-1]), [u0, v0, 0.0], t_eval=t, rtol=1e-13, atol=1e-13, method="DOP853")
+    return sol.y[0], sol.y[2]
+
+
+CONFIGURATIONS = [
+    # (name, P's roots and leading coefficient, u0, direction)
+    ("cubic, lead > 0, (r1, r2)", (-2.0, 0.5, 3.0), 1.5, 0.0, 1),
+    ("cubic, lead < 0, (r2, r3)", (-2.0, 0.5, 3.0), -0.7, 1.0, -1),
+    ("cubic, lead < 0 from a root", (-2.0, 0.5, 3.0), -0.7, 0.5, 0),
+    ("quadratic", (-1.0, 2.0), -0.3, 1.2, 1),
+    ("quartic, lead > 0, (r2, r3)", (-2.0, -0.5, 1.0, 2.5), 0.8, 0.2, -1),
+    ("quartic, lead < 0, (r1, r2)", (-2.0, -0.5, 1.0, 2.5), -0.4, -1.2, 1),
+    ("quartic, lead < 0, (r3, r4)", (-2.0, -0.5, 1.0, 2.5), -0.4, 2.0, -1),
+]
+
+
+@pytest.mark.parametrize("name, roots, lead, u0, direction", CONFIGURATIONS, ids=[c[0] for c in CONFIGURATIONS])
+def test_u_of_t_solves_the_quadrature_for_every_real_root_configuration(name, roots, lead, u0, direction):
+    coeffs = lead * np.poly(roots)
+    motion = elliptic_motion(coeffs, u0, direction)
+    t = np.linspace(0.0, 3.0 * float(motion.u_period), 301)
+    ref, _ = _ode_reference(coeffs, u0, direction, t)
+    assert np.max(np.abs(motion.u(t) - ref)) <= 1e-9 * (1 + np.max(np.abs(ref)))
+    # the period is the time between two passes through a turning point: 2∫ du/√P between the roots
+    from mpmath import mp, quad, sqrt
+    with mp.workdps(30):
+        a, b = sorted(motion.interval)  # P's roots at 40 digits: the integrand's endpoints
+        period = 2 * quad(lambda x: 1 / sqrt(mp.polyval([mp.mpf(c) for c in coeffs], x)), [a, b])
+    assert abs(float(motion.u_period) - float(period)) <= 1e-12 * float(period)
+
+
+def test_cubic_unbounded_branch_reaches_infinity_in_finite_time():
+    # u ≥ r3 for a cubic with positive lead: u = (r3 − r2 sn²)/cn², infinite at v = K (B&F 238.00)
+    coeffs = np.poly((-1.0, 0.5, 2.0))
+    motion = elliptic_motion(coeffs, 2.5, 1)
+    t_blow = float((motion.K - motion.v_start) / motion.kappa)
+    t = np.linspace(0.0, 0.98 * t_blow, 200)
+    ref, _ = _ode_reference(coeffs, 2.5, 1, t)
+    assert np.max(np.abs(motion.u(t) / ref - 1)) <= 1e-9
+
+
+def test_rate_integral_by_partial_fractions_and_pi():
+    coeffs = -2.0 * np.poly((-2.0, 0.2, 0.9))   # a spherical pendulum's kind of cubic, u = cos θ in (0.2, 0.9)
+    motion = elliptic_motion(coeffs, 0.5, 1)
+    rate = lambda u: (0.7 - 0.3 * u) / (1 - u * u)  # noqa: E731  φ̇'s form (3.74): poles at u = ±1
+    integral = rate_integral(motion, [-0.3, 0.7], [-1.0, 0.0, 1.0])
+    t = np.linspace(0.0, 4.0 * float(motion.u_period), 401)
+    _, ref = _ode_reference(coeffs, 0.5, 1, t, rate)
+    assert np.max(np.abs(integral(t) - ref)) <= 1e-9 * (1 + np.max(np.abs(ref)))
+    # the advance per period of u, against the quadrature of the rate over one period
+    from scipy.integrate import quad
+    T = float(motion.u_period)
+    assert abs(float(integral.advance) - quad(lambda s: rate(float(motion.u(np.array([s]))[0])), 0, T,
+                                              epsabs=1e-13, epsrel=1e-13, limit=200)[0]) <= 1e-10
+
+
+def test_configurations_not_covered_are_refused_with_the_reason():
+    with pytest.raises(NotElliptic, match="complex roots"):
+        elliptic_motion(np.poly((1.0, 2.0, 3.0, 4.0)) + [0, 0, 0, 0, 50.0], 2.5, 1)
+    with pytest.raises(NotElliptic, match="double root"):
+        elliptic_motion(-np.poly((0.0, 1.0, 1.0)), 0.5, 0)
+    with pytest.raises(NotElliptic, match="degree 2, 3 or 4"):
+        elliptic_motion([1.0, 2.0], 0.0, 1)
+    with pytest.raises(NotElliptic, match="bounded quadratic"):
+        elliptic_motion([1.0, 0.0, -1.0], 2.0, 1)
+
+
+# --- systems from their Lagrangians: closed form against integration -----------------------------------------
+
+SYSTEMS = [
+    ("pendulum libration", ["theta"], PENDULUM, G, dict(theta=2.0, theta_dot=0.0), "libration through a fold"),
+    ("pendulum libration, moving start", ["theta"], PENDULUM, G, dict(theta=0.3, theta_dot=-2.0),
+     "libration through a fold"),
+    ("pendulum rotation", ["theta"], PENDULUM, G, dict(theta=0.0, theta_dot=7.0), "rotation"),
+    ("pendulum rotation backwards", ["theta"], PENDULUM, G, dict(theta=1.0, theta_dot=-7.0), "rotation"),
+    ("pendulum just below the separatrix", ["theta"], PENDULUM, G, dict(theta=0.0, theta_dot=6.2641),
+     "libration through a fold"),
+    ("pendulum just above the separatrix", ["theta"], PENDULUM, G, dict(theta=0.0, theta_dot=6.2643), "rotation"),
+    ("spherical pendulum", ["theta", "phi"], SPHERICAL, G, dict(theta=0.7, phi=0.4, theta_dot=1.3, phi_dot=-1.5),
+     "oscillation between turning points"),
+    ("spherical pendulum through the pole", ["theta", "phi"], SPHERICAL, G,
+     dict(theta=1.0, phi=0.0, theta_dot=0.0, phi_dot=0.0), "libration through a fold"),
+    ("spherical pendulum near the pole", ["theta", "phi"], SPHERICAL, G,
+     dict(theta=1.0, phi=0.0, theta_dot=0.0, phi_dot=0.05), "oscillation between turning points"),
+    ("heavy top as a Lagrangian", ["theta", "phi", "psi"], TOP, TOP_PARAMETERS,
+     dict(theta=0.9, phi=0.3, psi=-0.2, theta_dot=0.3, phi_dot=-1.0, psi_dot=15.0), "oscillation between turning points"),
+    ("anharmonic well (u = x²)", ["x"], "x_dot**2/2 - k*x**2/2 - lam*x**4/4", dict(k=1.0, lam=1.0),
+     dict(x=0.5, x_dot=1.0), "libration through a fold"),
+    ("double well, over the hump", ["x"], "x_dot**2/2 + x**2/2 - x**4/4", {}, dict(x=0.5, x_dot=1.0),
+     "libration through a fold"),
+    ("double well, in one well", ["x"], "x_dot**2/2 + x**2/2 - x**4/4", {}, dict(x=1.0, x_dot=0.3),
+     "oscillation between turning points"),
+    # the steady limits: a conical pendulum (its two roots 1.5e-17 apart, from φ̇'s rounding) and one at rest
+    ("conical pendulum", ["theta", "phi"], SPHERICAL, G,
+     dict(theta=0.8, phi=0.0, theta_dot=0.0, phi_dot=float(np.sqrt(9.81 / np.cos(0.8)))),
+     "oscillation between turning points"),
+    ("pendulum at rest", ["theta"], PENDULUM, G, dict(theta=0.0, theta_dot=0.0), "steady"),
+]
+
+
+@pytest.mark.parametrize("name, coordinates, lagrangian, parameters, initial, kind", SYSTEMS,
+                         ids=[s[0] for s in SYSTEMS])
+def test_auto_takes_the_closed_form_and_it_agrees_with_integration(name, coordinates, lagrangian, parameters,
+                                                                   initial, kind):
+    exact = run_scene(_scene(coordinates, lagrangian, parameters, initial))
+    assert exact.report["method"] == "exact", exact.report.get("note")
+    assert exact.report["details"]["closed_form"]["motion"] == kind
+    integrated = run_scene(_scene(coordinates, lagrangian, parameters, initial, method="integrate"))
+    for q, column in exact.columns.items():
+        # both within their estimates of the truth: the integration's (rtol 1e-12 met) dominates
+        bound = 10 * (exact.report["error_estimate"] + integrated.report["error_estimate"]) + 1e-12
+        assert np.max(np.abs(column - integrated.columns[q])) <= bound * (1 + np.max(np.abs(column))), q
+    # the closed form's own residual: the invariants it conserves, to rounding (near the pole φ̇ ∝ 1/sin²θ
+    # magnifies it: ~400 for the closest case)
+    for drift in exact.report["drift"].values():
+        assert drift <= 1e-12
+
+
+def test_accelerating_pivot_is_the_top_in_g_plus_a():
+    """The inertial-frame Lagrangian of a top whose pivot rises as a t²/2 depends on t only through a total
+    derivative: the closed form is the top's with g + a, checked against integrating that L itself."""
+    lag = ("I1/2*(theta_dot**2 + sin(theta)**2*phi_dot**2) + I3/2*(psi_dot + cos(theta)*phi_dot)**2 + M/2*(a*t)**2"
+           " - M*a*t*l*sin(theta)*theta_dot - M*g*(a*t**2/2 + l*cos(theta))")
+    params = dict(TOP_PARAMETERS, a=3.0)
+    init = dict(theta=0.5, phi=0.0, psi=0.0, theta_dot=0.0, phi_dot=0.0, psi_dot=20.0)
+    coords = ["theta", "phi", "psi"]
+    exact = run_scene(_scene(coords, lag, params, init, quantities=coords))
+    integrated = run_scene(_scene(coords, lag, params, init, method="integrate", quantities=coords))
+    assert exact.report["method"] == "exact"
+    for q in coords:
+        assert np.max(np.abs(exact.columns[q] - integrated.columns[q])) <= 1e-10
+
+
+def test_time_dependence_that_is_not_a_gauge_is_refused():
+    from mechderive.core.quadrature import NoQuadrature, without_time_gauge
+    from mechderive.systems.lagrangian import from_lagrangian
+
+    system = from_lagrangian("x_dot**2/2 - (1 + t)*x**2/2", ["x"], [])
+    with pytest.raises(NoQuadrature, match="not a gauge"):
+        without_time_gauge(system.equations.lagrangian_model)
+    result = run_scene(_scene(["x"], "x_dot**2/2 - (1 + t)*x**2/2", {}, dict(x=1.0, x_dot=0.0), quantities=["x"]))
+    assert result.report["method"] == "integrate" and "not a gauge" in result.report["note"]
+
+
+REFUSED = [
+    ("double pendulum", ["a", "b"],
+     "(m1+m2)/2*l1**2*a_dot**2 + m2/2*l2**2*b_dot**2 + m2*l1*l2*a_dot*b_dot*cos(a-b) + (m1+m2)*g*l1*cos(a)"
+     " + m2*g*l2*cos(b)", dict(m1=1.0, m2=1.0, l1=1.0, l2=1.0, g=9.81), dict(a=0.5, b=0.2, a_dot=0.0, b_dot=0.0),
+     "one coordinate left"),
+    ("asymmetric heavy top", ["theta", "phi", "psi"],
+     "I1/2*(sin(theta)*sin(psi)*phi_dot + cos(psi)*theta_dot)**2 + I2/2*(sin(theta)*cos(psi)*phi_dot - "
+     "sin(psi)*theta_dot)**2 + I3/2*(psi_dot + cos(theta)*phi_dot)**2 - M*g*l*cos(theta)",
+     dict(I1=1.0, I2=1.3, I3=0.5, M=1.0, g=9.81, l=0.1),
+     dict(theta=0.5, phi=0.0, psi=0.1, theta_dot=0.0, phi_dot=0.0, psi_dot=20.0), "one coordinate left"),
+    ("quintic F", ["x"], "x_dot**2/2 - x**5", {}, dict(x=0.3, x_dot=0.1), "degree 5"),
+    ("pendulum balanced upside down", ["theta"], PENDULUM, G, dict(theta=float(np.pi), theta_dot=0.0),
+     "unstable equilibrium"),
+]
+
+
+@pytest.mark.parametrize("name, coordinates, lagrangian, parameters, initial, reason", REFUSED,
+                         ids=[r[0] for r in REFUSED])
+def test_auto_integrates_where_there_is_no_closed_form_and_says_why(name, coordinates, lagrangian, parameters,
+                                                                    initial, reason):
+    result = run_scene(_scene(coordinates, lagrangian, parameters, initial, t_end=2.0, samples=21,
+                              quantities=coordinates, rtol=1e-9))
+    assert result.report["method"] == "integrate"
+    assert reason in result.report["note"], result.report["note"]
+    with pytest.raises(InvalidInputError, match=reason):
+        run_scene(_scene(coordinates, lagrangian, parameters, initial, method="exact", t_end=2.0, samples=21,
+                         quantities=coordinates, rtol=1e-9))
+
+
+def test_a_wrong_fold_fails_the_closed_forms_own_check(monkeypatch):
+    """No silent wrong answer: with the fold of u = q² mis-scaled, the invariants drift and auto integrates."""
+    from mechderive.core import quadrature
+
+    shape = quadrature.SHAPES["u = q²"]
+    monkeypatch.setitem(quadrature.SHAPES, "u = q²", quadrature.Shape(shape.dg, shape.inverse, shape.folds,
+                                                                      shape.local, 1.0))
+    result = run_scene(_scene(["x"], "x_dot**2/2 - x**2/2 - x**4/4", {}, dict(x=0.5, x_dot=1.0)))
+    assert result.report["method"] == "integrate"
+    assert "failed its own check" in result.report["note"]
+
+
+def test_asking_for_theta_builds_no_partial_fractions_of_phi(monkeypatch):
+    from mechderive.solvers import quadrature_motion
+
+    def refuse(*_, **__):
+        raise AssertionError("φ's partial fractions were built for a scene asking θ only")
+
+    monkeypatch.setattr(quadrature_motion, "rate_integral", refuse)
+    result = run_scene(_scene(["theta", "phi"], SPHERICAL, G, dict(theta=1.0, phi=0.0, theta_dot=0.0, phi_dot=2.0),
+                              quantities=["theta"]))
+    assert result.report["method"] == "exact"
+
+
+# --- derived summaries ------------------------------------------------------------------------------------------
+
+def test_turning_points_and_advance_per_period_against_a_fine_integration():
+    init = dict(theta=0.7, phi=0.4, theta_dot=1.3, phi_dot=-1.5)
+    names = ["period", "theta_min", "theta_max", "phi_per_period"]
+    result = run_scene(_scene(["theta", "phi"], SPHERICAL, G, init, summary=names, quantities=["theta"]))
+    s, err = result.report["summary"], result.report["summary_error"]
+    T = s["period"]
+
+    def rhs(_, y):
+        th, ph, thd, phd = y
+        return [thd, phd, np.sin(th) * np.cos(th) * phd**2 - 9.81 * np.sin(th), -2 * thd * phd / np.tan(th)]
+
+    def turning(_, y):
+        return y[2]
+
+    sol = solve_ivp(rhs, (0, T), [0.7, 0.4, 1.3, -1.5], rtol=1e-13, atol=1e-13, method="DOP853", events=turning)
+    extremes = sol.y_events[0][:, 0]
+    assert abs(s["theta_min"] - extremes.min()) <= 1e-10 and abs(s["theta_max"] - extremes.max()) <= 1e-10
+    assert abs(s["phi_per_period"] - (sol.y[1, -1] - 0.4)) <= 1e-10
+    assert all(0 < err[n] < 1e-12 for n in names)
+
+
+def test_summaries_of_a_rotation_say_why_there_are_no_turning_points():
+    result = run_scene(_scene(["theta"], PENDULUM, G, dict(theta=0.0, theta_dot=7.0), quantities=["theta"],
+                              summary=["period", "theta_min"]))
+    assert result.report["summary"]["theta_min"] is None
+    assert "rotation" in result.report["summary_error"]["theta_min"]
+
+
+# --- the orbit along a cyclic coordinate: Kepler and a precessing orbit -------------------------------------
+
+@pytest.mark.parametrize("lagrangian, parameters, initial", [
+    ("m/2*(r_dot**2 + r**2*phi_dot**2) + k/r", dict(m=1.0, k=1.0), dict(r=1.0, phi=0.0, r_dot=0.1, phi_dot=1.2)),
+    ("m/2*(r_dot**2 + r**2*phi_dot**2) + k/r", dict(m=1.0, k=1.0), dict(r=1.0, phi=0.0, r_dot=0.2, phi_dot=1.6)),
+    ("m/2*(r_dot**2 + r**2*phi_dot**2) + k/r + beta/r**2", dict(m=1.0, k=1.0, beta=0.05),
+     dict(r=1.0, phi=0.0, r_dot=0.0, phi_dot=1.1)),
+], ids=["ellipse", "hyperbola", "precessing"])
+def test_central_force_orbit_along_phi(lagrangian, parameters, initial):
+    from mechderive.systems.lagrangian.closed import closed_orbit
+
+    scene = _scene(["r", "phi"], lagrangian, parameters, initial, t_end=3.0, samples=301, quantities=["r", "phi"])
+    integrated = run_scene(scene)
+    # in t, u = 1/r gives a sextic: no elliptic closed form; auto integrates and says why
+    assert integrated.report["method"] == "integrate"
+    assert "degree ≤ 4" in integrated.report["note"]
+    orbit = closed_orbit(scene.model, "phi", scene.parameters, scene.initial)
+    assert (orbit.found.name, orbit.found.degree) == ("u = 1/q", 2)
+    phi = integrated.columns["phi"] - initial["phi"]
+    r = orbit.columns(phi, ["r"])["r"]
+    assert np.max(np.abs(r - integrated.columns["r"])) <= 1e-10
+    beta = parameters.get("beta", 0.0)
+    p = initial["r"] ** 2 * initial["phi_dot"]
+    assert abs(float(orbit.period) - 2 * np.pi / np.sqrt(1 - 2 * beta / p**2)) <= 1e-13
+
+
+# --- the printed solution ---------------------------------------------------------------------------------------
+
+def test_printed_formulas_reproduce_the_motion():
+    from mechderive.core.codegen import to_python_source
+    from mechderive.systems.lagrangian.closed import closed_motion, solution_formulas
+
+    scene = _scene(["theta", "phi"], SPHERICAL, G, dict(theta=1.0, phi=0.0, theta_dot=0.0, phi_dot=2.0))
+    system = scene.model
+    formulas = solution_formulas(system)
+    motion = closed_motion(system, scene.parameters, scene.initial)
+    mo = motion.motion
+    a, b, c, _ = mo.branch_points
+    roots = {sp.Symbol("u_a", real=True): float(a), sp.Symbol("u_b", real=True): float(b),
+             sp.Symbol("u_c", real=True): float(c)}
+    params = {s: scene.parameters[s.name] for s in system.definition.parameter_symbols}
+    assert float(formulas["m"][1].subs(roots)) == pytest.approx(float(mo.m), rel=1e-14)
+    assert float(formulas["kappa"][1].subs(roots).subs(params)) == pytest.approx(float(mo.kappa), rel=1e-14)
+    # φ − φ0 between two amplitudes, by the generated NumPy code, against the closed form's Π evaluation
+    chi, chi0 = sp.Symbol("chi", real=True), sp.Symbol("chi_0", real=True)
+    p_phi = sp.Symbol("p_phi", real=True)
+    expr = formulas["phi"][1].subs(roots).subs(params).subs(p_phi, np.sin(1.0) ** 2 * 2.0)
+    namespace: dict = {}
+    exec(to_python_source(expr, [chi, chi0], "phi_of"), namespace)
+    t = np.array([0.37, 2.9])
+    v = float(mo.kappa) * t + float(mo.v_start)
+    from mechderive.special import jacobi_am
+    got = namespace["phi_of"](np.asarray(jacobi_am(v, float(mo.m)), float), float(jacobi_am(float(mo.v_start),
+                                                                                            float(mo.m))))
+    want = motion.columns(t, ["phi"])["phi"]
+    assert np.max(np.abs(got - want)) <= 1e-12
+
+
+def test_derive_prints_the_solution_in_every_format(tmp_path, capsys):
+    from mechderive.cli import main
+
+    path = tmp_path / "spherical.toml"
+    path.write_text(parse_scene_text())
+    for fmt in ("text", "latex", "python"):
+        assert main(["derive", str(path), "closed_form", "closed_form_u", "closed_form_phi", "--format", fmt]) == 0
+        out = capsys.readouterr().out
+        assert ("Π" in out or "elliptic_pi" in out or "\\Pi" in out), fmt
+    assert main(["derive", str(path), "closed_form_phi", "--format", "python"]) == 0
+    namespace: dict = {}
+    exec(capsys.readouterr().out, namespace)
+    assert callable(namespace["lagrangian_closed_form_phi"])
+
+
+def parse_scene_text() -> str:
+    from mechderive.systems.lagrangian.system import EXAMPLE_SCENE
+
+    return EXAMPLE_SCENE
+
+
+# --- the heavy top: the generic recipe recovers the hand-built closed form ------------------------------------
+
+def test_generic_recipe_gives_the_hand_built_heavy_top_formulas():
+    """m, κ² of (3.76) and φ̇'s partial fractions (3.74) from the heavy top given as a Lagrangian equal the
+    hand-built derivation's (exact_model), symbolically, with β = 2Mgl/I1, b = p_φ/I1, a = p_ψ/I1 (3.66)."""
+    from mechderive.systems.heavy_top import exact_model
+    from mechderive.systems.heavy_top import model as heavy
+    from mechderive.systems.lagrangian import from_lagrangian
+    from mechderive.systems.lagrangian.closed import solution_formulas
+
+    system = from_lagrangian(TOP, ["theta", "phi", "psi"], list(TOP_PARAMETERS))
+    generic = solution_formulas(system)
+    hand = exact_model.model().nutation_constants
+    ua, ub, uc = sp.symbols("u_a u_b u_c", real=True)
+    roots = {ua: exact_model.u1, ub: exact_model.u2, uc: exact_model.u3}
+    names = {s.name: s for s in system.definition.parameter_symbols}
+    to_hand = {names["I1"]: heavy.I1, names["M"]: heavy.M, names["g"]: heavy.g, names["l"]: heavy.l}
+    beta = 2 * heavy.M * heavy.g * heavy.l / heavy.I1
+    assert sp.simplify(generic["m"][1].subs(roots) - hand["m"]) == 0
+    assert sp.simplify(generic["kappa"][1].subs(roots).subs(to_hand) ** 2 - hand["kappa2"].subs(heavy.beta, beta)) == 0
+    # φ̇ as a rational function of u: the generic reduction's against (3.74)
+    N, D = system.cyclic_rates()["phi"]
+    p_phi, p_psi = sp.Symbol("p_phi", real=True), sp.Symbol("p_psi", real=True)
+    u = N.gens[0]
+    generic_rate = (N.as_expr() / D.as_expr()).subs(to_hand).subs({p_phi: heavy.b * heavy.I1, p_psi: heavy.a * heavy.I1})
+    assert sp.cancel(generic_rate.subs(u, heavy.u) - heavy.model().precession_rate_u) == 0
+
+
+def test_generic_heavy_top_matches_the_hand_built_one_over_100_nutation_periods():
+    from mechderive import exact_heavy_top
+    from mechderive.systems.lagrangian import from_lagrangian
+    from mechderive.systems.lagrangian.closed import closed_motion
+
+    init = dict(theta=0.5, phi=0.0, psi=0.0, theta_dot=0.0, phi_dot=0.0, psi_dot=20.0)
+    hand = exact_heavy_top(TOP_PARAMETERS, init)
+    system = from_lagrangian(TOP, ["theta", "phi", "psi"], list(TOP_PARAMETERS))
+    generic = closed_motion(system, TOP_PARAMETERS, init)
+    T = hand.nutation_period
+    assert abs(float(generic.period) - T) <= 1e-14 * T
+    t = np.concatenate([np.linspace(0, T, 41), 100 * T + np.linspace(0, T, 41)])
+    got = generic.columns(t, ["theta", "phi", "psi"])
+    for q in ("theta", "phi", "psi"):
+        want = getattr(hand, q)(t)
+        assert np.max(np.abs(got[q] - want)) <= 1e-12 * (1 + np.max(np.abs(want))), q
