@@ -11,7 +11,9 @@ Five measurements (see each module's docstring for the case and what is timed):
    (:mod:`.startup`);
 5. the time saved by laziness (a scene asking for ``u`` only against one asking for everything);
 6. one's own body through the user path (:mod:`.rigid_body`): an asymmetric heavy top as a ``rigid_body``
-   scene against the same body written by hand with ``sympy.physics.mechanics`` → ``solve_ivp``.
+   scene against the same body written by hand with ``sympy.physics.mechanics`` → ``solve_ivp``;
+7. interactive speed (:mod:`.interactive`), sweeps (:mod:`.sweep`), and the closed forms the toolkit finds
+   itself for the issue-16 systems against the compiled DOP853 (:mod:`.closed_forms`).
 
 :func:`check_targets` compares them with the issue's targets (:mod:`.report`).  ``quick=True``:
 10 periods, fewer rows, M ≤ 100, no cache-disabled runs, and section 5 only when asked for.  Nothing here is a test: figures are
@@ -33,7 +35,8 @@ from .report import check_targets, format_report, plot_work_precision
 
 __all__ = ["run_benchmarks", "format_report", "plot_work_precision", "check_targets", "SECTIONS"]
 
-SECTIONS = ("heavy_top", "free_top", "ensemble", "cold_start", "laziness", "rigid_body", "interactive", "sweep")
+SECTIONS = ("heavy_top", "free_top", "ensemble", "cold_start", "laziness", "rigid_body", "interactive", "sweep",
+            "closed_forms")
 
 
 def _versions() -> dict:
@@ -59,13 +62,15 @@ def run_benchmarks(*, quick: bool = False, sections: tuple[str, ...] | None = No
                    log: Callable[[str], None] | None = None) -> dict:
     """Run the benchmark ``sections`` and return every figure as plain data (JSON-ready), with the targets.
 
-    ``sections`` defaults to all of :data:`SECTIONS`, except ``laziness``, ``rigid_body``, ``interactive`` and ``sweep``
+    ``sections`` defaults to all of :data:`SECTIONS`, except ``laziness``, ``rigid_body``, ``interactive``, ``sweep`` and
+    ``closed_forms``
     (a minute of fresh processes) when ``quick``
     (the first needs a cold derivation of every heavy-top quantity, ~5-10 s, the second the baseline's
     derivation with ``sympy.physics.mechanics``, ~3 s; name them to have them anyway).
     """
     if sections is None:
-        sections = tuple(s for s in SECTIONS if not (quick and s in ("laziness", "rigid_body", "interactive", "sweep")))
+        sections = tuple(s for s in SECTIONS
+                         if not (quick and s in ("laziness", "rigid_body", "interactive", "sweep", "closed_forms")))
     unknown = [s for s in sections if s not in SECTIONS]
     if unknown:
         raise InvalidInputError(f"expected sections among {', '.join(SECTIONS)}, got {unknown[0]!r}")
@@ -119,6 +124,12 @@ def run_benchmarks(*, quick: bool = False, sections: tuple[str, ...] | None = No
         say("sweep: points per second, local pool and Dask, 1 and 2 workers ...")
         result["sweep"] = sweep_throughput(quick=quick)
         lap("sweep")
+    if "closed_forms" in sections:
+        from .closed_forms import closed_form_table
+
+        say("closed forms found by the toolkit: each issue-16 system against the compiled DOP853 ...")
+        result["closed_forms"] = closed_form_table(quick=quick)
+        lap("closed_forms")
     if "cold_start" in sections or "laziness" in sections:
         from .startup import cold_start, laziness
 

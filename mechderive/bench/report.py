@@ -204,8 +204,12 @@ def format_report(result: dict) -> str:
         from .sweep import report_lines as sweep_lines
 
         L += sweep_lines(result["sweep"])
+    if result.get("closed_forms"):
+        from .closed_forms import report_lines as closed_lines
+
+        L += closed_lines(result["closed_forms"])
     skipped = [s for s in ("heavy_top", "free_top", "ensemble", "cold_start", "laziness", "rigid_body",
-                           "interactive", "sweep") if s not in result]
+                           "interactive", "sweep", "closed_forms") if s not in result]
     if skipped:
         L += [f"Not run: {', '.join(skipped)} (see --only; --quick leaves out laziness).", ""]
     targets = result.get("targets", [])
