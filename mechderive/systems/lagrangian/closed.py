@@ -84,7 +84,9 @@ class ClosedMotion:
         self.initial = dict(initial)
         self.shape = SHAPES[found.name]
         mp = _mp()
-        with mp.workdps(DPS):
+        # the constants to 20 digits beyond the working precision: near a steady motion the roots of P are close
+        # and their distance (the amplitude) needs them (elliptic_motion raises its precision then)
+        with mp.workdps(DPS + 20):
             values = self._constants(model, parameters, initial)
             if energy_shift:
                 # the period's and turning points' sensitivity to E's rounding (an estimate, not the motion)
@@ -158,7 +160,7 @@ class ClosedMotion:
         import sympy as sp
 
         mp = _mp()
-        value = sp.N(sp.sympify(expr).subs(self.values), 50) if hasattr(expr, "subs") else expr
+        value = sp.N(sp.sympify(expr).subs(self.values), mp.mp.dps + 10) if hasattr(expr, "subs") else expr
         return mp.mpf(str(sp.re(value))) if not isinstance(value, (int, float)) else mp.mpf(value)
 
     def _constants(self, model: Any, parameters: dict, initial: dict) -> dict:
@@ -177,10 +179,10 @@ class ClosedMotion:
             symbols |= {model.momentum_symbols[q]}
         for sym in symbols:
             if sym.name == "E":
-                values[sym] = sp.N(model.energy_function.subs(state).subs(self._par(parameters)), 55)
+                values[sym] = sp.N(model.energy_function.subs(state).subs(self._par(parameters)), 75)
         for q in model.cyclic_coordinates:
             values[model.momentum_symbols[q]] = sp.N(model.conserved_momenta[q].subs(state)
-                                                     .subs(self._par(parameters)), 55)
+                                                     .subs(self._par(parameters)), 75)
         values.update(self._par(parameters))
         return values
 
@@ -202,6 +204,36 @@ class ClosedMotion:
         mp = _mp()
         with mp.workdps(DPS):
             return [self._number(c) for c in N.all_coeffs()], [self._number(c) for c in D.all_coeffs()]
+
+    @functools.lru_cache(maxsize=None)
+    def rate_poles(self, name: str) -> tuple:
+        """(N's coefficients as doubles, D's leading coefficient, D's real roots (working precision), D's other
+        factor's coefficients): ċ = N(u) / (lead·Π(u − p_j)·rest(u)), so that u − p_j near a pole is taken from the
+        nearer end of the motion (:meth:`~mechderive.solvers.quadrature_motion.EllipticMotion.minus`)."""
+        from ...solvers.quadrature_motion import DPS
+
+        num, den = self.rate_coefficients(name)
+        mp = _mp()
+        with mp.workdps(DPS):
+            if len(den) == 1:
+                return [float(x) for x in num], float(den[0]), (), [1.0]
+            roots = mp.polyroots(den, maxsteps=400, extraprec=6 * DPS)
+            tiny = mp.mpf(10) ** (-DPS // 2)
+            real = [mp.re(r) for r in roots if abs(mp.im(r)) <= tiny * (1 + abs(r))]
+            rest = [mp.mpf(1)]
+            for r in roots:
+                if abs(mp.im(r)) > tiny * (1 + abs(r)):
+                    rest = [x - r * y for x, y in zip(rest + [0], [0] + rest)]
+            return ([float(x) for x in num], float(den[0]), tuple(real), [float(mp.re(x)) for x in rest])
+
+    def _rate_values(self, name: str, t: np.ndarray, jac: tuple) -> np.ndarray:
+        num, lead, poles, rest = self.rate_poles(name)
+        u = self.motion.u(t, jac)
+        den = lead * np.polyval(rest, u)
+        for p in poles:
+            den = den * self.motion.minus(p, t, jac)
+        with np.errstate(all="ignore"):
+            return np.polyval(num, u) / den
 
     @functools.lru_cache(maxsize=None)
     def rate(self, name: str) -> tuple:
@@ -288,9 +320,7 @@ class ClosedMotion:
                 integral, _, _ = self.rate(c)
                 out[c] = float(self.initial[c]) + integral(t, jac)
             if c + "_dot" in wanted:
-                num, den = ([float(x) for x in xs] for xs in self.rate_coefficients(c))
-                u = self.motion.u(t, jac)
-                out[c + "_dot"] = np.polyval(num, u) / np.polyval(den, u)
+                out[c + "_dot"] = self._rate_values(c, t, jac)
         return out
 
     def check_derivatives(self, t: np.ndarray, names: Sequence[str]) -> str | None:
