@@ -53,8 +53,10 @@ E  top on a vertically accelerating pivot, L = B's kinetic terms + M/2 (a t)² -
    equivalent time-independent top, I1/2 (θ̇² + sin²θ φ̇²) + I3/2 ω3² + M (g + a) l cosθ, with p_φ, p_ψ as in B.
 
 Run:  python tests/reference/make_quadrature_reference.py [name ...]
-      (about 10 minutes on one core of the development machine; writes quadrature_cases.json; with
+      (about 2.5 minutes on one core of the development machine; writes quadrature_cases.json; with
       names, only those cases are regenerated and the others are kept from the existing file)
+      python tests/reference/make_quadrature_reference.py --check [name ...]
+      (regenerates at 10 more digits and prints the largest difference from the file; about 5 minutes)
 """
 
 from __future__ import annotations
@@ -75,6 +77,7 @@ OUT = Path(__file__).with_name("quadrature_cases.json")
 DYADIC = 2 ** 20    # sample times are multiples of 2^-20 (exact doubles, exact decimals)
 NEAR = 1            # an event sample is this many 2^-20 s after the event (≈ 1e-6 s)
 FRACTIONS = (0.13, 0.37, 0.61, 0.88)
+MORE_FRACTIONS = (0.74, 0.25)  # added while a case has fewer than 6 first-period samples
 LONG = ((100, 0.3), (137, 0.8), (1000, 0.1), (2024, 0.65))
 
 L_SPH = "m*l**2/2*(theta_dot**2 + sin(theta)**2*phi_dot**2) + m*g*l*cos(theta)"
@@ -113,7 +116,7 @@ CASES = [
     _case("spherical_moving_start", "sph", ["theta", "phi"], L_SPH, P_SPH, _sph(0.7, 0.4, 1.3, -1.5),
           period=("return", 2, 0), events=[("turning", 5, 0)]),
     _case("spherical_conical", "sph", ["theta", "phi"], L_SPH, P_SPH, _sph(0.8, 0.0, 0.0, PHI_DOT_CONICAL),
-          period=("turn", 5), events=[], dps=50, long="conical"),
+          period=("turn", 5), events=[("turning", 5, 0)], dps=50, long="conical"),
     _case("spherical_through_pole", "sph_planar", ["theta", "phi"], L_SPH, P_SPH, _sph(1.0, 0.0, 0.0, 0.0),
           period=("turn", 3), events=[("fold", 0, 0), ("turning", 3, 0)]),
     _case("spherical_near_pole", "sph", ["theta", "phi"], L_SPH, P_SPH, _sph(1.0, 0.0, 0.0, 0.05),
@@ -487,6 +490,9 @@ def generate(case, report=print, only_times=None):
                 raise RuntimeError(f"{name}: no {label} event")
             times.append(round(float(te) * DYADIC + NEAR) / DYADIC)
             figures[f"event_{label}"] = float(te)
+        for fr in MORE_FRACTIONS:
+            if len(set(times)) < 6:
+                times.append(dyadic(fr * T))
         times = sorted(set(times))
         for t in times:
             samples.append((t,) + motion.read(mpmath.mpf(t)))
@@ -534,6 +540,29 @@ def generate(case, report=print, only_times=None):
     return entry, figures
 
 
+def check(names=None, extra=10) -> None:
+    """Regenerate at ``extra`` more digits (tolerance and working precision) and compare with the file."""
+    stored = {c["name"]: c for c in json.loads(OUT.read_text())["cases"]}
+    for case in CASES:
+        if names and case["name"] not in names:
+            continue
+        with mpmath.workdps(case.get("dps", WORK_DPS) + extra):
+            entry, _ = generate(case, report=lambda s: None)
+            old = stored[case["name"]]
+            diffs = []
+            if old["period"] is not None:
+                diffs.append(abs(mpmath.mpf(entry["period"]) - mpmath.mpf(old["period"])) / mpmath.mpf(old["period"]))
+            for c, v in old["advance"].items():
+                diffs.append(abs(mpmath.mpf(entry["advance"][c]) - mpmath.mpf(v)) / max(1, abs(mpmath.mpf(v))))
+            assert [s["t"] for s in entry["samples"]] == [s["t"] for s in old["samples"]], case["name"]
+            for new, s in zip(entry["samples"], old["samples"]):
+                for key in ("q", "q_dot"):
+                    for c, v in s[key].items():
+                        diffs.append(abs(mpmath.mpf(new[key][c]) - mpmath.mpf(v)) / max(1, abs(mpmath.mpf(v))))
+            print(f"{case['name']}: at {mpmath.mp.dps} digits, max difference from the file "
+                  f"{mpmath.nstr(max(diffs), 3)} (relative to max(1, |value|))", flush=True)
+
+
 def main(names=None) -> None:
     old = {}
     if names and OUT.exists():
@@ -558,4 +587,7 @@ def main(names=None) -> None:
 
 
 if __name__ == "__main__":
-    main(sys.argv[1:] or None)
+    if sys.argv[1:2] == ["--check"]:
+        check(sys.argv[2:] or None)
+    else:
+        main(sys.argv[1:] or None)
