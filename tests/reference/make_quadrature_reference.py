@@ -3,19 +3,24 @@
 Method.  mpmath's Taylor-series ODE solver (``mpmath.odefun``) integrates equations of motion that are
 WRITTEN BY HAND below (Euler–Lagrange worked out on paper, or Newton) — not derived by SymPy and not by
 mechderive.  Working precision ``WORK_DPS`` = 36 digits (40 for the two near-separatrix pendulums,
-50 for the conical pendulum), ``odefun`` tolerance 10^-dps, Taylor degree 30; the stored strings carry
-30 significant digits.  The accuracy is absolute (≈ 1e-32 on the scale of each coordinate), so a value
-that happens to be tiny (θ a microsecond after crossing 0, θ̇ of the conical pendulum) carries 30
-significant digits of which only the leading ones are above that absolute accuracy.
+50 for the conical pendulum), ``odefun`` tolerance 10^-dps (its local truncation error per Taylor step),
+Taylor degree 30; the stored strings carry 30 significant digits.  ``--check`` regenerates everything
+with 10 more digits in both the working precision and the tolerance: on 2026-11-28 every stored string
+(periods, advances, all samples, tiny values near a crossing included) came back identical.  Where a
+coordinate is unwrapped far (θ of the rotating pendulum ≈ 12720 at 2024.65 T), 30 significant digits are
+an absolute 1e-26: that, not the integration, limits such samples.
 
 Times are doubles that are exact dyadic numbers (multiples of 2^-20): the "t" string is the exact
 decimal value of that double and the motion is integrated to exactly that time.  Initial values are
 the doubles listed in CASES, converted with ``mpmath.mpf(float)``.
 
 Long times use the period symmetry: the period T is a simple root (Newton on the dense solution, at
-the working precision) of q_k(t) - q_k(0) or of q̇_k(t) when the motion starts at a turning point; the
-state returns and a cyclic coordinate advances by Δ per period, so q(NT + τ) = q(τ) + NΔ.  Samples at
-100.3 T, 137.8 T, 1000.1 T, 2024.65 T cost nothing beyond the first period.
+the working precision) of q_k(t) - q_k(0) (- 2π for the rotating pendulums), or of q̇_k(t) when the
+motion starts at a turning point; the state returns and a cyclic coordinate advances by Δ per period, so q(NT + τ) = q(τ) + NΔ.  Samples at
+100.3 T, 137.8 T, 1000.1 T, 2024.65 T cost nothing beyond the first period.  The conical pendulum is
+not exactly steady: its φ̇ is the double nearest √(g/(l cos 0.8)), so θ oscillates by ~1e-16 rad about
+the cone (θ̇ ~ 1e-17); its "period" is that of this small oscillation (the cubic's nearly double root),
+and its samples run to t < 100 (3.3 T, 10.8 T, 37.1 T, 92.65 T).
 
 Independent second methods (printed): the period and the advances from a quadrature of the reduced
 one-degree-of-freedom problem (u = cos θ: u̇² = f(u) cubic; T = 4∫_0^{π/2} dχ / √(-A (u - u3)) with
@@ -52,11 +57,18 @@ E  top on a vertically accelerating pivot, L = B's kinetic terms + M/2 (a t)² -
    The Jacobi integral of this L is not conserved (L depends on t); the energy checked is that of the
    equivalent time-independent top, I1/2 (θ̇² + sin²θ φ̇²) + I3/2 ω3² + M (g + a) l cosθ, with p_φ, p_ψ as in B.
 
+Figures of the run of 2026-11-28 (one core, pure-Python mpmath, no gmpy): generation 141 s in all, per
+case 1.7 s (conical) to 35 s (near-separatrix libration), the tops 6-15 s; energy and momenta of the samples
+at the working precision within 1e-36 relative (9e-34 for the rotating pendulum's far-unwrapped θ); the
+period from the ODE against the second method within 2e-37 relative (5e-36 for the conical pendulum, whose
+cubic has a nearly double root), the advances within 2e-34 absolute; Kepler's equation against the orbit
+samples within 4e-34; --check 409 s.
+
 Run:  python tests/reference/make_quadrature_reference.py [name ...]
       (about 2.5 minutes on one core of the development machine; writes quadrature_cases.json; with
       names, only those cases are regenerated and the others are kept from the existing file)
       python tests/reference/make_quadrature_reference.py --check [name ...]
-      (regenerates at 10 more digits and prints the largest difference from the file; about 5 minutes)
+      (regenerates at 10 more digits and prints the largest difference from the file; about 7 minutes)
 """
 
 from __future__ import annotations
@@ -341,9 +353,8 @@ class Motion:
 
 # ---------------------------------------------------------------- independent second methods
 
-def _cubic_period(A_coeffs_f, u0, rates):
+def _cubic_period(f, u0, rates):
     """T and per-period advances ∮ rate(u) dt of u̇² = f(u) (cubic), u oscillating between the roots around u0."""
-    f = A_coeffs_f
     pts = [mpmath.mpf(x) for x in (-1, 0, 1, 2)]
     V = mpmath.matrix([[x ** 3, x ** 2, x, 1] for x in pts])
     c = mpmath.lu_solve(V, mpmath.matrix([f(x) for x in pts]))
