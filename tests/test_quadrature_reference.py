@@ -94,7 +94,8 @@ def test_cases_and_format():
         if case["period"] is not None:
             T = mpmath.mpf(case["period"])
             assert sum(mpmath.mpf(s["t"]) < T for s in case["samples"]) >= 6
-            assert sum(mpmath.mpf(s["t"]) > 100 * T for s in case["samples"]) >= 3 or case["name"] == "spherical_conical"
+            late = sum(mpmath.mpf(s["t"]) > 100 * T for s in case["samples"])
+            assert late >= 3 or case["name"] == "spherical_conical"  # the conical one runs to t < 100
     assert CASES["pendulum_rotation"]["advance"]["theta"] == mpmath.nstr(2 * mpmath.pi, 30)
 
 
@@ -111,7 +112,8 @@ def test_regenerated_from_scratch():
         assert new["t"] == old["t"]
         for key in ("q", "q_dot"):
             for c in old[key]:
-                assert abs(mpmath.mpf(new[key][c]) - mpmath.mpf(old[key][c])) <= TOL * max(abs(mpmath.mpf(old[key][c])), 1)
+                value = mpmath.mpf(old[key][c])
+                assert abs(mpmath.mpf(new[key][c]) - value) <= TOL * max(abs(value), 1)
 
 
 @pytest.mark.slow

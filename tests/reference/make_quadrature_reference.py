@@ -16,9 +16,10 @@ the doubles listed in CASES, converted with ``mpmath.mpf(float)``.
 
 Long times use the period symmetry: the period T is a simple root (Newton on the dense solution, at
 the working precision) of q_k(t) - q_k(0) (- 2π for the rotating pendulums), or of q̇_k(t) when the
-motion starts at a turning point; the state returns and a cyclic coordinate advances by Δ per period, so q(NT + τ) = q(τ) + NΔ.  Samples at
-100.3 T, 137.8 T, 1000.1 T, 2024.65 T cost nothing beyond the first period.  The conical pendulum is
-not exactly steady: its φ̇ is the double nearest √(g/(l cos 0.8)), so θ oscillates by ~1e-16 rad about
+motion starts at a turning point; the state returns and a cyclic coordinate advances by Δ per period,
+so q(NT + τ) = q(τ) + NΔ.  Samples at 100.3 T, 137.8 T, 1000.1 T, 2024.65 T cost nothing beyond the first period.  The conical pendulum is
+not exactly steady: its φ̇ is the double float(sqrt(9.81/cos(0.8))) computed in
+doubles, not the exact steady rate, so θ oscillates by ~1e-16 rad about
 the cone (θ̇ ~ 1e-17); its "period" is that of this small oscillation (the cubic's nearly double root),
 and its samples run to t < 100 (3.3 T, 10.8 T, 37.1 T, 92.65 T).
 
@@ -381,7 +382,7 @@ def _cubic_period(f, u0, rates):
 
 def second_method(case, motion):
     """(T, advances) by a method independent of the ODE integration; None where not applicable."""
-    s, p, y0 = case["system"], motion.p, motion.y0
+    s, p = case["system"], motion.p
     q0, qd0 = motion.read_raw(0)
     E, mom = energy_momenta(s, p, q0, qd0)
     if s in ("sph", "sph_planar"):
@@ -414,7 +415,9 @@ def second_method(case, motion):
             return None, {}
         a = -k / (2 * E)
         pphi = mom["phi"]
-        return 2 * mpmath.pi * mpmath.sqrt(m * a ** 3 / k), {"phi": 2 * mpmath.pi * pphi / mpmath.sqrt(pphi ** 2 - 2 * m * beta)}
+        # the radial motion is Kepler's with p² → p² - 2 m β: the same T; φ turns by 2π p / √(p² - 2 m β)
+        return (2 * mpmath.pi * mpmath.sqrt(m * a ** 3 / k),
+                {"phi": 2 * mpmath.pi * pphi / mpmath.sqrt(pphi ** 2 - 2 * m * beta)})
     raise ValueError(s)
 
 
@@ -574,6 +577,15 @@ def check(names=None, extra=10) -> None:
                   f"{mpmath.nstr(max(diffs), 3)} (relative to max(1, |value|))", flush=True)
 
 
+def _write(entries):
+    OUT.write_text(json.dumps({
+        "source": "tests/reference/make_quadrature_reference.py", "dps": DPS,
+        "method": f"mpmath.odefun (Taylor, degree {DEGREE}, tol 10^-dps at {WORK_DPS} digits, 40 near the "
+                  "separatrix, 50 for the conical pendulum) on hand-written equations of motion; period "
+                  "symmetry for long times; times are exact dyadic doubles",
+        "cases": entries}, indent=1) + "\n")
+
+
 def main(names=None) -> None:
     old = {}
     if names and OUT.exists():
@@ -588,12 +600,8 @@ def main(names=None) -> None:
         with mpmath.workdps(case.get("dps", WORK_DPS)):
             entry, _ = generate(case, report=lambda s: print(s, flush=True))
         entries.append(entry)
-        OUT.write_text(json.dumps({
-            "source": "tests/reference/make_quadrature_reference.py", "dps": DPS,
-            "method": f"mpmath.odefun (Taylor, degree {DEGREE}, tol 10^-dps at {WORK_DPS} digits, 40 near the "
-                      "separatrix, 50 for the conical pendulum) on hand-written equations of motion; period "
-                      "symmetry for long times; times are exact dyadic doubles",
-            "cases": entries}, indent=1) + "\n")
+        _write(entries + [old[c["name"]] for c in CASES[len(entries):] if c["name"] in old])  # progress
+    _write(entries)
     print(f"total {time.time() - total:.1f} s")
 
 
