@@ -83,3 +83,36 @@ def test_orbit_along_phi_against_30_digit_integration(case):
     if case["period"] is not None:
         advance = float(case["advance"]["phi"])
         assert abs(float(orbit.period) - advance) <= 1e-14 * advance
+
+
+@pytest.mark.parametrize("case", [c for c in CASES if c["name"] not in ORBITS and c["advance"]
+                                  and c["name"] != "spherical_conical"], ids=lambda c: c["name"])
+def test_per_period_advances_against_the_references(case):
+    """``<c>_per_period`` (complete Π, 40 digits) against the reference's advance over one period (its period
+    found as a root at 36+ digits); a rotating pendulum's θ advances by 2π (the fold scale times π)."""
+    from mechderive.systems.lagrangian.closed import closed_motion
+
+    motion = closed_motion(_system(case), case["parameters"], case["initial"])
+    for name, advance in case["advance"].items():
+        got = (motion.shape.scale * np.pi * (1 if motion.qd0 > 0 else -1) if name == motion.remaining
+               else motion.summary(f"{name}_per_period"))
+        assert abs(got - float(advance)) <= 1e-13 * max(1.0, abs(float(advance))), (name, got, advance)
+
+
+def test_accelerating_pivot_summaries_in_a_scene():
+    """The period and advances of the top on the accelerating pivot, as a scene's summaries (L depends on t: the
+    closed form of its gauge-free L), against the reference."""
+    from mechderive.scenes.planner import run_scene
+    from mechderive.scenes.schema import parse_scene
+
+    case = next(c for c in CASES if c["name"] == "top_accelerating_pivot")
+    names = ["period", "phi_per_period", "psi_per_period"]
+    scene = parse_scene({"system": "lagrangian", "coordinates": case["coordinates"], "lagrangian": case["lagrangian"],
+                         "parameters": case["parameters"], "initial": case["initial"], "rtol": 1e-10,
+                         "time": {"t_end": 3.0, "samples": 301}, "output": {"quantities": ["theta"], "summary": names}})
+    result = run_scene(scene)
+    summary, errors = result.report["summary"], result.report["summary_error"]
+    want = {"period": case["period"], "phi_per_period": case["advance"]["phi"],
+            "psi_per_period": case["advance"]["psi"]}
+    for name in names:
+        assert abs(summary[name] - float(want[name])) <= max(4 * errors[name], 1e-14 * abs(float(want[name])))

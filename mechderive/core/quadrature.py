@@ -149,17 +149,17 @@ def _as_polynomial(expr: sp.Expr, u: sp.Symbol) -> sp.Poly | None:
     def transcendental(e: sp.Expr) -> bool:
         return any(f.has(u) for f in e.atoms(sp.Function))
 
-    def slow(e: sp.Expr) -> sp.Expr:
+    def slow(e: sp.Expr) -> sp.Expr | None:
         # SymPy's simplify costs seconds; it is only worth it where no function of u is left that the
         # faster normal forms could not remove (cos u under u = q stays cos u whatever simplify does)
-        if transcendental(e):
-            raise ValueError("a transcendental function of u remains")
-        return sp.cancel(sp.simplify(e))
+        return None if transcendental(e) else sp.cancel(sp.simplify(e))
 
     for form in (lambda e: sp.cancel(sp.together(e)), lambda e: sp.cancel(trig_normal(e)), slow):
         try:
             e = form(expr)
         except (TypeError, ValueError, NotImplementedError, RecursionError, sp.PolynomialError):
+            continue
+        if e is None:
             continue
         num, den = sp.fraction(e)
         if den.has(u):

@@ -42,6 +42,18 @@ def _mp():
     return mpmath
 
 
+def _per_instance(method):
+    """Cache ``method(self, name)`` on the instance (an lru_cache on the method would keep every motion alive)."""
+    @functools.wraps(method)
+    def cached(self, name):
+        store = self.__dict__.setdefault("_cached_" + method.__name__, {})
+        if name not in store:
+            store[name] = method(self, name)
+        return store[name]
+
+    return cached
+
+
 @dataclasses.dataclass
 class ExactRun:
     """The closed form's state at the output times, as a trajectory offers it: ``t``, ``y`` (q then q̇, in the
@@ -116,8 +128,9 @@ class ClosedMotion:
         ends = []
         for end, value in (("a", a), ("b", b)):
             fold = None if mp.isinf(value) else self.shape.fold_point(float(value), q0)
-            exact_fold = fold is not None and any(abs(value - mp.mpf(u_e)) <= mp.mpf(10) ** -25
-                                                  for u_e, _, _ in self.shape.folds)
+            with mp.workdps(DPS):  # a root 1e-17 from a fold is a turning point, not the fold
+                exact_fold = fold is not None and any(abs(value - mp.mpf(u_e)) <= mp.mpf(10) ** -25
+                                                      for u_e, _, _ in self.shape.folds)
             ends.append(end if exact_fold else None)
         folds = [e for e in ends if e]
         if motion.steady:
@@ -160,7 +173,7 @@ class ClosedMotion:
         import sympy as sp
 
         mp = _mp()
-        value = sp.N(sp.sympify(expr).subs(self.values), mp.mp.dps + 10) if hasattr(expr, "subs") else expr
+        value = sp.N(expr.subs(self.values), mp.mp.dps + 10) if hasattr(expr, "subs") else expr
         return mp.mpf(str(sp.re(value))) if not isinstance(value, (int, float)) else mp.mpf(value)
 
     def _constants(self, model: Any, parameters: dict, initial: dict) -> dict:
@@ -192,7 +205,7 @@ class ClosedMotion:
         syms = self.system.definition.parameter_symbols
         return {s: sp.Float(float(parameters[s.name]), 60) for s in syms if s.name in parameters}
 
-    @functools.lru_cache(maxsize=None)
+    @_per_instance
     def rate_coefficients(self, name: str) -> tuple[list, list]:
         """ċ = N(u)/D(u) of the cyclic coordinate ``name``: N's and D's coefficients (highest first, 40 digits)."""
         from ...solvers.quadrature_motion import DPS
@@ -205,7 +218,7 @@ class ClosedMotion:
         with mp.workdps(DPS):
             return [self._number(c) for c in N.all_coeffs()], [self._number(c) for c in D.all_coeffs()]
 
-    @functools.lru_cache(maxsize=None)
+    @_per_instance
     def rate_poles(self, name: str) -> tuple:
         """(N's coefficients as doubles, D's leading coefficient, D's real roots (working precision), D's other
         factor's coefficients): ċ = N(u) / (lead·Π(u − p_j)·rest(u)), so that u − p_j near a pole is taken from the
@@ -235,7 +248,7 @@ class ClosedMotion:
         with np.errstate(all="ignore"):
             return np.polyval(num, u) / den
 
-    @functools.lru_cache(maxsize=None)
+    @_per_instance
     def rate(self, name: str) -> tuple:
         """(∫ ċ dt as a :class:`~mechderive.solvers.quadrature_motion.RateIntegral`, N, D as doubles), built on
         first request: a scene asking for θ alone never builds φ's partial fractions."""

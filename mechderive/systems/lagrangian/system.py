@@ -105,7 +105,7 @@ class LagrangianSystem(System):
 
         reduced: tuple = ()
         remaining = [q for q in d.coordinates if q not in eq.cyclic]
-        if len(remaining) == 1 and not d.uses_time:
+        if len(remaining) == 1:
             q = remaining[0]
             reduced = (Quantity(f"{q}_min", "", f"smallest {q} of the motion (closed form: a turning point, from "
                                 "the roots of P(u)); none for a rotation or where L does not reduce"),
@@ -412,7 +412,14 @@ class LagrangianSystem(System):
             columns = keep + list(range(n, 2 * n))
             errors = None if traj.component_error is None else np.asarray(traj.component_error)[columns]
             if self.definition.uses_time:
-                out["period"] = (None, "the Lagrangian depends on t: the motion need not repeat")
+                # a time that is only a gauge (core.quadrature.without_time_gauge) leaves a repeating motion
+                found, why = self.reduction()
+                if found is None:
+                    out["period"] = (None, f"the Lagrangian depends on t: the motion need not repeat ({why})")
+                else:
+                    closed = self._closed_summaries(scene, drifts, ["period"])["period"]
+                    measured = period_of(np.asarray(traj.t), np.asarray(traj.y)[:, columns], errors)
+                    out["period"] = measured if closed[0] is None else _checked(closed, measured)
             else:
                 closed = self._closed_period(scene, drifts)
                 measured = period_of(np.asarray(traj.t), np.asarray(traj.y)[:, columns], errors)
@@ -503,14 +510,20 @@ class LagrangianSystem(System):
 
         try:
             base = closed_motion(self, dict(scene.parameters), dict(scene.initial))
-            shift = 8 * 2.0**-52 * max(float(drifts["energy"].scale), abs(float(drifts["energy"].start)))
+            energy = [float(v) for k, v in base.values.items() if k.name == "E"]
+            shift = 8 * 2.0**-52 * (max(float(drifts["energy"].scale), abs(float(drifts["energy"].start)))
+                                    if "energy" in drifts else abs(energy[0]) if energy else 1.0)
             moved = closed_motion(self, dict(scene.parameters), dict(scene.initial), energy_shift=shift)
         except OutOfReach as exc:
             return {n: (None, str(exc)) for n in names}
         out = {}
         for n in names:
+            if n == "period" and base.kind in ("steady", "unbounded") or base.kind.startswith("unbounded"):
+                out[n] = (None, f"a {base.kind} motion: no period")
+                continue
             try:
-                value, other = base.summary(n), moved.summary(n)
+                value, other = ((float(base.period), float(moved.period)) if n == "period"
+                                else (base.summary(n), moved.summary(n)))
             except OutOfReach as exc:
                 out[n] = (None, str(exc))
                 continue
