@@ -104,6 +104,22 @@ def test_rate_integral_by_partial_fractions_and_pi():
                                               epsabs=1e-13, epsrel=1e-13, limit=200)[0]) <= 1e-10
 
 
+def test_rate_with_a_polynomial_part_integrates_with_legendre_e():
+    """ċ = 0.3 + 0.8 u: a part linear in w = sn², ∫ sn² = (v − E(am v|m))/m."""
+    coeffs = -2.0 * np.poly((-2.0, 0.2, 0.9))
+    motion = elliptic_motion(coeffs, 0.5, 1)
+    integral = rate_integral(motion, [0.8, 0.3], [1.0])
+    assert integral.q1 != 0 and not integral.terms
+    t = np.linspace(0.0, 4.0 * float(motion.u_period), 401)
+    _, ref = _ode_reference(coeffs, 0.5, 1, t, lambda u: 0.3 + 0.8 * u)
+    assert np.max(np.abs(integral(t) - ref)) <= 1e-9 * (1 + np.max(np.abs(ref)))
+    # the per-period advance: 0.3 T + 0.8 ∫u dt over a period
+    from scipy.integrate import quad
+    T = float(motion.u_period)
+    assert abs(float(integral.advance) - quad(lambda s: 0.3 + 0.8 * float(motion.u(np.array([s]))[0]), 0, T,
+                                              epsabs=1e-13, epsrel=1e-13)[0]) <= 1e-11
+
+
 def test_configurations_not_covered_are_refused_with_the_reason():
     with pytest.raises(NotElliptic, match="complex roots"):
         elliptic_motion(np.poly((1.0, 2.0, 3.0, 4.0)) + [0, 0, 0, 0, 50.0], 2.5, 1)

@@ -18,7 +18,6 @@ formulas); DOP853's error is its distance to the closed form.  The refused syste
 from __future__ import annotations
 
 import time
-from typing import Any
 
 __all__ = ["closed_form_table", "report_lines", "CASES"]
 
