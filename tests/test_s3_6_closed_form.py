@@ -61,12 +61,15 @@ CONFIGURATIONS = [
     ("quartic, lead > 0, (r2, r3)", (-2.0, -0.5, 1.0, 2.5), 0.8, 0.2, -1),
     ("quartic, lead < 0, (r1, r2)", (-2.0, -0.5, 1.0, 2.5), -0.4, -1.2, 1),
     ("quartic, lead < 0, (r3, r4)", (-2.0, -0.5, 1.0, 2.5), -0.4, 2.0, -1),
+    # two real roots and the pair 1 ± 2i: u between the real ones in cn (Byrd & Friedman 259.00)
+    ("quartic with a complex pair", (-1.0, 2.0, complex(1, 2), complex(1, -2)), -1.0, 0.3, 1),
+    ("quartic with a complex pair, from a root", (-1.0, 2.0, complex(1, 2), complex(1, -2)), -1.0, -1.0, 0),
 ]
 
 
 @pytest.mark.parametrize("name, roots, lead, u0, direction", CONFIGURATIONS, ids=[c[0] for c in CONFIGURATIONS])
 def test_u_of_t_solves_the_quadrature_for_every_real_root_configuration(name, roots, lead, u0, direction):
-    coeffs = lead * np.poly(roots)
+    coeffs = lead * np.real(np.poly(roots))
     motion = elliptic_motion(coeffs, u0, direction)
     t = np.linspace(0.0, 3.0 * float(motion.u_period), 301)
     ref, _ = _ode_reference(coeffs, u0, direction, t)
@@ -122,7 +125,9 @@ def test_rate_with_a_polynomial_part_integrates_with_legendre_e():
 
 def test_configurations_not_covered_are_refused_with_the_reason():
     with pytest.raises(NotElliptic, match="complex roots"):
-        elliptic_motion(np.poly((1.0, 2.0, 3.0, 4.0)) + [0, 0, 0, 0, 50.0], 2.5, 1)
+        elliptic_motion([-1.0, 0.0, -2.0, 0.0, -1.0], 0.0, 1)  # −(u² + 1)²: no real root
+    with pytest.raises(NotElliptic, match="through infinity"):
+        elliptic_motion(np.real(np.poly((-1.0, 2.0, complex(1, 2), complex(1, -2)))), 3.0, 1)
     with pytest.raises(NotElliptic, match="double root"):
         elliptic_motion(-np.poly((0.0, 1.0, 1.0)), 0.5, 0)
     with pytest.raises(NotElliptic, match="degree 2, 3 or 4"):
@@ -156,6 +161,8 @@ SYSTEMS = [
      "libration through a fold"),
     ("double well, in one well", ["x"], "x_dot**2/2 + x**2/2 - x**4/4", {}, dict(x=1.0, x_dot=0.3),
      "oscillation between turning points"),
+    ("asymmetric anharmonic well (quartic, complex pair)", ["x"], "x_dot**2/2 - x**4/4 - x**3/3 - x**2/2", {},
+     dict(x=0.3, x_dot=0.8), "oscillation between turning points"),
     # the steady limits: a conical pendulum (its two roots 1.5e-17 apart, from φ̇'s rounding) and one at rest
     ("conical pendulum", ["theta", "phi"], SPHERICAL, G,
      dict(theta=0.8, phi=0.0, theta_dot=0.0, phi_dot=float(np.sqrt(9.81 / np.cos(0.8)))),

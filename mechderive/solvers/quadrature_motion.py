@@ -27,8 +27,11 @@ digits).
 A start on a double root u_s of P with P''(u_s) < 0 is a steady motion: u ≡ u_s, and the rates integrate to
 R(u_s)·t (the degenerate M(w) = u_s).
 
-Not covered (the caller integrates instead; :class:`NotElliptic` says why): a quartic with complex
-roots, a cubic with one real root, an unbounded quadratic, degree ≤ 1, a separatrix (a double root at
+A quartic with two real roots and a complex pair oscillates between the real ones in cn
+(:class:`EllipticMotionCn`, Byrd & Friedman 259.00); its cyclic rates are not covered.
+
+Not covered (the caller integrates instead; :class:`NotElliptic` says why): a quartic with only complex
+roots or escaping through infinity, a cubic with one real root, an unbounded quadratic, degree ≤ 1, a separatrix (a double root at
 an end of the motion, m = 1) or an unstable equilibrium, and rates with complex poles, poles on the
 motion, or a polynomial part of degree > 1 in w.
 """
@@ -42,7 +45,7 @@ import numpy as np
 
 from ..errors import InvalidInputError
 
-__all__ = ["NotElliptic", "EllipticMotion", "RateIntegral", "elliptic_motion", "rate_integral", "DPS", "REFERENCE_DPS"]
+__all__ = ["NotElliptic", "EllipticMotion", "EllipticMotionCn", "RateIntegral", "elliptic_motion", "rate_integral", "DPS", "REFERENCE_DPS"]
 
 #: working precision of the constants (decimal digits)
 DPS = 40
@@ -206,6 +209,18 @@ class EllipticMotion:
 
     # --- 40-digit evaluation, for the estimate -------------------------------------------------
 
+    def mp_u(self, sn, cn, dn) -> Any:
+        """u from the Jacobi functions (mpmath numbers), at the caller's precision."""
+        A, B, C, D = self.mobius
+        w = sn * sn
+        return (A + B * w) / (C + D * w)
+
+    def mp_u_dot(self, sn, cn, dn) -> Any:
+        """u̇ from the Jacobi functions (mpmath numbers): M'(w) ẇ."""
+        A, B, C, D = self.mobius
+        w = sn * sn
+        return (B * C - A * D) / (C + D * w) ** 2 * 2 * self.kappa * sn * cn * dn
+
     def u_mp(self, t) -> Any:
         """u(t) at the working precision (mpmath), as a reference for the doubles."""
         mp = _mp()
@@ -215,6 +230,83 @@ class EllipticMotion:
             A, B, C, D = self.mobius
             w = sn * sn
             return (A + B * w) / (C + D * w)
+
+
+class EllipticMotionCn(EllipticMotion):
+    """u(t) = (A + B cn v)/(C + D cn v), v = κ t + v_s: a quartic with two real roots a < b and a complex pair,
+    u oscillating between them (Byrd & Friedman 259.00: cn v = ((b − u)A − (u − a)B)/((b − u)A + (u − a)B) with
+    A, B the distances from b and a to the complex roots, m = ((b − a)² − (A − B)²)/(4AB), κ² = |lead|·A·B).
+    The period of u is 4K/κ.  Folds, rotations and the cyclic rates' Π are not offered on this form."""
+
+    def u(self, t: Any, jac: tuple | None = None) -> np.ndarray:
+        sn, cn, dn, _, _ = self.jacobi(t) if jac is None else jac
+        A, B, C, D, det = self._mob()
+        return (A + B * cn) / (C + D * cn)
+
+    def u_dot(self, t: Any, jac: tuple | None = None) -> np.ndarray:
+        sn, cn, dn, _, _ = self.jacobi(t) if jac is None else jac
+        A, B, C, D, det = self._mob()
+        return -det / (C + D * cn) ** 2 * float(self.kappa) * sn * dn
+
+    def minus(self, point: Any, t: Any, jac: tuple | None = None) -> np.ndarray:
+        return self.u(t, jac) - float(point)
+
+    def signed_root(self, end: str, t: Any, jac: tuple | None = None) -> tuple[np.ndarray, np.ndarray]:
+        raise NotElliptic("expected no fold of the substitution on a quartic with complex roots (not covered)")
+
+    def mp_u(self, sn, cn, dn) -> Any:
+        A, B, C, D = self.mobius
+        return (A + B * cn) / (C + D * cn)
+
+    def mp_u_dot(self, sn, cn, dn) -> Any:
+        A, B, C, D = self.mobius
+        return -(B * C - A * D) / (C + D * cn) ** 2 * self.kappa * sn * dn
+
+    def u_mp(self, t) -> Any:
+        mp = _mp()
+        with mp.workdps(DPS):
+            v = self.kappa * mp.mpf(t) + self.v_start
+            return self.mp_u(None, mp.ellipfun("cn", v, m=self.m), None)
+
+
+def _complex_pair_quartic(c: list, roots: list, u0: Any, direction: int) -> EllipticMotion:
+    """The :class:`EllipticMotionCn` of a quartic with two real roots and a complex pair (see there)."""
+    mp = _mp()
+    if c[0] > 0:
+        raise NotElliptic("expected a bounded motion, got a quartic with two real roots and positive leading "
+                          "coefficient: u escapes through infinity (not covered)")
+    a, b = roots
+    if not a - mp.mpf(2) ** -40 * (1 + abs(u0)) <= u0 <= b + mp.mpf(2) ** -40 * (1 + abs(u0)):
+        raise NotElliptic(f"expected the start between the real roots {mp.nstr(a, 10)} and {mp.nstr(b, 10)}, "
+                          f"got u0 = {mp.nstr(u0, 10)}")
+    pair = [z for z in mp.polyroots(c, maxsteps=400, extraprec=6 * mp.mp.dps) if abs(mp.im(z)) > 0]
+    b1, a1 = mp.re(pair[0]), abs(mp.im(pair[0]))
+    dist_b, dist_a = mp.sqrt((b - b1) ** 2 + a1**2), mp.sqrt((a - b1) ** 2 + a1**2)
+    m = ((b - a) ** 2 - (dist_a - dist_b) ** 2) / (4 * dist_a * dist_b)
+    k2 = -c[0] * dist_a * dist_b
+    # cn = 1 at u = a, cn = −1 at u = b:  u = (a·A_b... ) written as (A + B cn)/(C + D cn)
+    A, B = a * dist_b + b * dist_a, a * dist_b - b * dist_a
+    C, D = dist_b + dist_a, dist_b - dist_a
+    P = lambda x: mp.polyval(c, x)  # noqa: E731
+
+    def kappa_sq(cn):
+        du = (B * C - A * D) / (C + D * cn) ** 2
+        return P((A + B * cn) / (C + D * cn)) / (du**2 * (1 - cn * cn) * (1 - m + m * cn * cn))
+
+    for cn in (mp.mpf(1) / 3, -mp.mpf(2) / 5):
+        if abs(kappa_sq(cn) - k2) > mp.mpf(10) ** -8 * abs(k2):
+            raise NotElliptic(f"expected the cn form to fit the quartic (κ² constant), got {mp.nstr(k2, 8)} and "
+                              f"{mp.nstr(kappa_sq(cn), 8)}: an inconsistent root configuration")
+    kappa = mp.sqrt(k2)
+    K = mp.ellipk(m)
+    cn0 = min(max((A - C * u0) / (D * u0 - B), mp.mpf(-1)), mp.mpf(1))
+    v0 = mp.ellipf(mp.acos(cn0), m)  # in [0, 2K]: u runs from a to b as v does (sign of du/dv = −det·sn)
+    rising = -(B * C - A * D) > 0
+    v_start = v0 if (direction >= 0) == rising else -v0
+    if direction == 0:
+        v_start = mp.mpf(0) if cn0 > 0 else 2 * K
+    return EllipticMotionCn(tuple(c), (a, b), (a, b, mp.mpf("nan"), mp.mpf("nan")), (A, B, C, D), m, 1 - m, kappa,
+                            v_start, K, 4 * K / kappa, 4)
 
 
 def _real_roots(coeffs: Sequence) -> list:
@@ -281,6 +373,8 @@ def _elliptic_motion(coefficients: Sequence, u0: Any, direction: int, dps: int) 
         u0 = mp.mpf(u0)
         P = lambda x: mp.polyval(c, x)  # noqa: E731
         roots = _real_roots(c)
+        if degree == 4 and len(roots) == 2:
+            return _complex_pair_quartic(c, roots, u0, direction)
         if degree == 4 and len(roots) < 4 or degree == 3 and len(roots) < 3 or degree == 2 and len(roots) < 2:
             raise NotElliptic(f"expected {degree} real roots of P (degree {degree}), got {len(roots)}: a "
                               "configuration with complex roots, not covered by this closed form")
@@ -522,6 +616,9 @@ def rate_integral(motion: EllipticMotion, numerator: Sequence, denominator: Sequ
     mpmath reads); raises :class:`NotElliptic` where the partial fractions in w are not the simple kind the
     module docstring lists."""
     mp = _mp()
+    if isinstance(motion, EllipticMotionCn):
+        raise NotElliptic("expected a motion in sn² for a cyclic coordinate's Π, got a quartic with complex roots "
+                          "(its rates are not covered)")
     with mp.workdps(DPS):
         N = [mp.mpf(x) for x in numerator]
         Dn = [mp.mpf(x) for x in denominator]

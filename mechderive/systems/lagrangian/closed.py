@@ -77,7 +77,7 @@ class ClosedMotion:
         import sympy as sp
 
         from ...core.quadrature import SHAPES
-        from ...solvers.quadrature_motion import DPS, NotElliptic, elliptic_motion
+        from ...solvers.quadrature_motion import DPS, EllipticMotionCn, NotElliptic, elliptic_motion
 
         self.system = system
         found, reason = system.reduction(along)
@@ -135,6 +135,9 @@ class ClosedMotion:
         folds = [e for e in ends if e]
         if motion.steady:
             folds = []
+        if folds and isinstance(motion, EllipticMotionCn):
+            raise OutOfReach(f"the reduction {found.name} reaches a fold of the substitution on a quartic with "
+                             "complex roots: not covered")
         if len(folds) == 2:
             if motion.mobius[3] != 0:
                 raise OutOfReach(f"a rotation through both folds of {found.name} with a quartic P: not covered")
@@ -378,9 +381,7 @@ class ClosedMotion:
             for i, ti in enumerate(ts):
                 v = mo.kappa * mp.mpf(float(ti)) + mo.v_start
                 sn, cn, dn = (mp.ellipfun(f, v, m=mo.m) for f in ("sn", "cn", "dn"))
-                A, B, C, D = mo.mobius
-                w = sn * sn
-                u = (A + B * w) / (C + D * w)
+                u = mo.mp_u(sn, cn, dn)
                 ref: dict = {}
                 r = self.remaining
                 if r in got:
@@ -446,8 +447,7 @@ class ClosedMotion:
         q = mp.mpf(q_double)
         for _ in range(2):
             q = q - (gl(q) - u) / dgl(q)
-        u_dot = det / (C + D * w) ** 2 * 2 * kap * sn * cn * dn
-        return q, u_dot / dgl(q)
+        return q, mo.mp_u_dot(sn, cn, dn) / dgl(q)
 
 
 def closed_orbit(system: Any, along: str, parameters: dict, initial: dict) -> ClosedMotion:
