@@ -104,20 +104,19 @@ def reduce_to_quadrature(model: LagrangianModel, along: str | None = None) -> Qu
     where u = 1/r makes it a quadratic while in t it is not a quartic."""
     if model.state_lagrangian.has(sp.Symbol("t")) or any(s.name == "t" for s in model.state_lagrangian.free_symbols):
         raise NoQuadrature("expected a Lagrangian without explicit time: the energy is not conserved")
+    remaining = model.remaining_coordinates if model.cyclic_coordinates else model.coordinates
+    if len(remaining) != 1:  # said before the Routhian is derived (seconds for an asymmetric top)
+        cyc = ", ".join(str(q) for q in model.cyclic_coordinates) or "none"
+        raise NoQuadrature(f"expected one coordinate left after the reduction by the cyclic coordinates ({cyc}), "
+                           f"got {len(remaining)}: {', '.join(str(q) for q in remaining)}")
     if model.cyclic_coordinates:
-        remaining = model.remaining_coordinates
         reduced = model.routhian
         potential = model.effective_potential
         momenta = tuple(model.momentum_symbols[q] for q in model.cyclic_coordinates)
     else:
-        remaining = model.coordinates
         reduced = model.state_lagrangian
         potential = sp.Integer(0)
         momenta = ()
-    if len(remaining) != 1:
-        cyc = ", ".join(str(q) for q in model.cyclic_coordinates) or "none"
-        raise NoQuadrature(f"expected one coordinate left after the reduction by the cyclic coordinates ({cyc}), "
-                           f"got {len(remaining)}: {', '.join(str(q) for q in remaining)}")
     index = model.coordinates.index(remaining[0])
     q, qd = model.positions[index], model.velocities[index]
     poly = sp.Poly(sp.expand(reduced), qd)
