@@ -308,7 +308,8 @@ def _tier(P: list[np.ndarray], S: list[np.ndarray], names: tuple[str, ...], dtyp
 
     ``keep``, if given, receives the intermediates in ``dtype`` (a, b, α, β; the roots ``w`` of f(u0 + w);
     u0; the shifted values; κ, m, 1 − m, K, T of the nutation): the single-point closed form's setup in
-    extended precision (:mod:`.exact_extended`) is this batch of one."""
+    extended precision (:mod:`.exact_extended`) is this batch of one.  With ``keep["values_only"]`` set,
+    only those are computed (no estimates; nothing answered)."""
     F = _functions()
     P = [x.astype(dtype) for x in P]
     S = [x.astype(dtype) for x in S]
@@ -325,6 +326,13 @@ def _tier(P: list[np.ndarray], S: list[np.ndarray], names: tuple[str, ...], dtyp
         rate0, d_bottom, d_pole = shift
         u0 = np.cos(S[0])
         w, last_step = _roots(c, -d_bottom, -d_pole)
+        want_advance = any(k in names for k in ("mean_precession_rate", "precession_per_nutation"))
+        base = _pipeline(F, P, a, beta, shift, w, want_advance)
+        if keep is not None:
+            keep.update(a=a, b=b, alpha=alpha, beta=beta, w=w, u0=u0, rate0=rate0, d_bottom=d_bottom, d_pole=d_pole,
+                        **{k: base[k] for k in ("kappa", "m", "m1", "K", "T")})
+            if keep.get("values_only"):  # the same values in another precision, to compare with: no estimates
+                return values, errors, np.zeros(n, dtype=bool)
         # f's rounding noise at each root, from the sizes of its coefficients' terms (8ε each); f shifted up and
         # down by the noise at the turning points widens and narrows the motion, u1, u2 and u3 consistently
         absw = np.abs(w)
@@ -335,16 +343,11 @@ def _tier(P: list[np.ndarray], S: list[np.ndarray], names: tuple[str, ...], dtyp
         moved = [_newton([c[0], c[1], c[2], c[3] + sign * near], w)[0] for sign in (1, -1)]
         dw = (np.max([np.abs(x - w) for x in moved], axis=0) + noise / slope + 2 * last_step).astype(float)
         amp = (w[:, 1] - w[:, 0]).astype(float)
-        want_advance = any(k in names for k in ("mean_precession_rate", "precession_per_nutation"))
-        base = _pipeline(F, P, a, beta, shift, w, want_advance)
         others = [_pipeline(F, P, a, beta, shift, x, want_advance) for x in moved]
 
         def propagated(key: str) -> np.ndarray:
             return np.max([np.abs(o[key] - base[key]) for o in others], axis=0).astype(float)
 
-        if keep is not None:
-            keep.update(a=a, b=b, alpha=alpha, beta=beta, w=w, u0=u0, rate0=rate0, d_bottom=d_bottom, d_pole=d_pole,
-                        **{k: base[k] for k in ("kappa", "m", "m1", "K", "T")})
         T = base["T"]
         T_err = propagated("T") + (np.abs(_agm_k(base["m1"]) - base["K"]) * 2 / base["kappa"]).astype(float) \
             + 4 * eps * np.abs(T.astype(float)) + _EPS64 * np.abs(T.astype(float))

@@ -111,13 +111,15 @@ def _incomplete_f(phi: Any, m1: Any) -> Any:
     return s * _scalar(elliprf(c * c, c * c + m1 * s * s, np.ones_like(c)))
 
 
-def _motion(P: list[np.ndarray], S: list[np.ndarray], dtype: type) -> tuple[bool, dict[str, Any]]:
-    """(the batch answers the point, the nutation's constants in ``dtype``) for one motion."""
+def _motion(P: list[np.ndarray], S: list[np.ndarray], dtype: type, *, checked: bool = True
+            ) -> tuple[bool, dict[str, Any]]:
+    """(the batch answers the point, the nutation's constants in ``dtype``) for one motion; without
+    ``checked`` the batch's estimates are skipped (the values only, to compare with)."""
     from .batch import _tier
 
-    keep: dict[str, Any] = {}
+    keep: dict[str, Any] = {"values_only": not checked}
     _, _, ok = _tier(P, S, _CHECKED, dtype, keep=keep)
-    k = {key: _scalar(v) for key, v in keep.items() if key != "w"}
+    k = {key: _scalar(v) for key, v in keep.items() if key not in ("w", "values_only")}
     w1, w2, w3 = (keep["w"][0, i] for i in range(3))
     amp = w2 - w1
     one, zero = dtype(1), dtype(0)
@@ -174,7 +176,7 @@ def setup(params: Mapping[str, float], init: Mapping[str, float], horizon: float
         answered, ext = _motion(P, S, np.longdouble)
         if not answered:
             return None
-        _, dbl = _motion(P, S, np.float64)
+        _, dbl = _motion(P, S, np.float64, checked=False)
         K, T = ext["K"], float(ext["T"])
         if not (math.isfinite(T) and T > 0):
             return None
