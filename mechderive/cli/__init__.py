@@ -77,6 +77,25 @@ class _Parser(argparse.ArgumentParser):
         else:
             super()._print_message(message, file)
 
+    def _get_formatter(self) -> argparse.HelpFormatter:
+        # the width argparse would take from shutil.get_terminal_size (COLUMNS, else the terminal, else 80,
+        # less 2): every add_argument makes a formatter, and importing shutil for it cost ~5 ms of each run
+        return self.formatter_class(prog=self.prog, width=_columns() - 2)
+
+
+def _columns() -> int:
+    """The terminal's width in columns as :func:`shutil.get_terminal_size` gives it, without importing shutil."""
+    try:
+        columns = int(os.environ["COLUMNS"])
+        if columns > 0:
+            return columns
+    except (KeyError, ValueError):
+        pass
+    try:
+        return os.get_terminal_size(sys.__stdout__.fileno()).columns or 80
+    except (AttributeError, ValueError, OSError):
+        return 80
+
 
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(
