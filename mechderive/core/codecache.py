@@ -116,8 +116,8 @@ def fingerprint() -> str:
     cache root (``stamps/``, sealed as the code is) under a *stamp* of the same files' paths, sizes,
     modification times (ns) and inodes and of the versions (~2 ms to take): a later process with the
     same stamp reads the recorded fingerprint instead of the files — the trust Python's own bytecode
-    cache puts in a source's size and modification time.  Any edit, checkout or install changes the
-    stamp, and the fingerprint is computed from the bytes again.
+    cache puts in a source's size and modification time.  Any edit, checkout or install (the folders on
+    ``sys.path`` change) changes the stamp, and the fingerprint is computed from the bytes again.
     """
     root = os.path.dirname(os.path.dirname(os.path.realpath(__file__)))
     files = []  # (relative path, os.stat_result)
@@ -133,9 +133,18 @@ def fingerprint() -> str:
                 elif entry.name.endswith(".py"):
                     files.append((entry.path[skip:], entry.stat()))
     files.sort(key=lambda f: f[0].split(os.sep))
-    versions = f"{sys.version}|" + "|".join(f"{dist}={_version(dist)}" for dist in ("sympy", "numpy", "mpmath"))
-    stamp = hashlib.sha256(repr([(rel, st.st_size, st.st_mtime_ns, st.st_ino) for rel, st in files]).encode()
-                           + versions.encode()).hexdigest()[:32]
+    # the installed versions stand in the stamp as the modification times of the folders on sys.path, which
+    # an install or removal changes (reading them off the .dist-info names is done on a miss only)
+    installs = []
+    for entry in sys.path:
+        if entry in ("", "."):  # the working folder: it changes with every file written there
+            continue
+        try:
+            installs.append((entry, os.stat(entry or ".").st_mtime_ns))
+        except OSError:
+            installs.append((entry, None))
+    stamp = hashlib.sha256(repr(([(rel, st.st_size, st.st_mtime_ns, st.st_ino) for rel, st in files],
+                                 sys.version, installs)).encode()).hexdigest()[:32]
     recorded = _stamped(stamp)
     if recorded is not None:
         return recorded

@@ -331,8 +331,9 @@ class _Estimator:
         q0, d0 = self._once("start_phase", lambda: self._phase_points(_Pass(sol, np.zeros(1))))
         q, d = self._get("phase_points", lambda: self._phase_points(ps))
         q, d = q.ravel()[picks], d.ravel()[picks]
-        F0, size0 = self._cumulative(which, q0, d0)
-        F, size = self._cumulative(which, q, d)
+        # the start and the picked samples in one call: their segments' rates in one evaluation
+        F, size = self._cumulative(which, np.concatenate([np.ravel(q0)[:1], q]), np.concatenate([np.ravel(d0)[:1], d]))
+        F0, size0, F, size = F[:1], size[:1], F[1:], size[1:]
         jumps = 0.0
         if which in ("phi", "psi") and (sol._one_minus_u2 == 0.0 or sol._one_plus_u1 == 0.0):
             jumps = np.pi * ps.passages().ravel()[picks]  # φ, ψ turn by π at each exact passage; the rates do not

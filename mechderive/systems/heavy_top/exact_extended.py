@@ -163,7 +163,7 @@ def setup(params: Mapping[str, float], init: Mapping[str, float], horizon: float
     ``params``, ``init``: as :func:`.parameters.check_params` and ``check_initial`` return them (``mgl``: the
     top was given by M g l, realised as M = 1, g = Mgl, l = 1).
     """
-    from .batch import _functions, _valid
+    from .batch import _valid
     from .exact import HeavyTopSolution, _passage_sign, classify
 
     if not EXTENDED or not math.isfinite(horizon):
@@ -197,7 +197,11 @@ def setup(params: Mapping[str, float], init: Mapping[str, float], horizon: float
         a, b, alpha, beta = ext["a"], ext["b"], ext["alpha"], ext["beta"]
         d_pole, d_bottom = (_scalar(x) for x in _compiled()["gaps"](*Pl, *Sl))
         coeffs = [_scalar(c) for c in _compiled()["f"](a, b, alpha, beta)]
-        energy = _scalar(_functions()["invariants"](*Pl, *Sl)[0])
+        # E = ½ I1 (θ̇² + φ̇² sin²θ) + ½ I3 ω3² + M g l cos θ (3.63)-(3.65), as the 40-digit setup forms it
+        I1_, I3_, M_, g_, l_ = (x[0] for x in Pl)
+        th, thd, phd, psd = (x[0] for x in Sl)
+        u0 = ext["u0"]
+        energy = (I1_ * (thd**2 + phd**2 * np.sin(th) ** 2) + I3_ * (psd + phd * u0) ** 2) / 2 + M_ * g_ * l_ * u0
     I1, I3 = Pl[0][0], Pl[1][0]
     u1, u2, u3 = ext["roots"]
     gm, gp = ext["gaps_minus"], ext["gaps_plus"]
