@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import argparse
 import errno
+import functools
 import os
 import sys
 from typing import Sequence
@@ -83,8 +84,10 @@ class _Parser(argparse.ArgumentParser):
         return self.formatter_class(prog=self.prog, width=_columns() - 2)
 
 
+@functools.cache
 def _columns() -> int:
-    """The terminal's width in columns as :func:`shutil.get_terminal_size` gives it, without importing shutil."""
+    """The terminal's width in columns as :func:`shutil.get_terminal_size` gives it, without importing shutil
+    (once per process: argparse asks at every argument it adds)."""
     try:
         columns = int(os.environ["COLUMNS"])
         if columns > 0:

@@ -53,7 +53,7 @@ from __future__ import annotations
 
 import functools
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, Mapping
 
 import numpy as np
@@ -525,7 +525,6 @@ QUANTITIES = ("u", "u_dot", "theta", "theta_dot", "phi", "psi", "phi_wrapped", "
               "R", "apex", "omega")
 
 
-@dataclass(frozen=True)
 class HeavyTopSolution:
     """The closed-form motion of one heavy symmetric top; methods take arrays of times (s).
 
@@ -537,6 +536,9 @@ class HeavyTopSolution:
     Only what is asked for is computed: θ(t) needs sn, cn of the reduced phase; φ(t) and ψ(t)
     need the amplitude and Π, and their constants (including the partial fractions of φ̇, ψ̇)
     are derived and computed on the first request for either.
+
+    Immutable, with the ``__init__``, ``repr`` and ``==`` a frozen dataclass would have: written out,
+    because generating those methods (one ``exec`` each) took ~3 ms of every warm ``mechderive run``.
     """
 
     parameters: dict
@@ -560,7 +562,49 @@ class HeavyTopSolution:
     _one_minus_u2: float
     _one_plus_u1: float
     _theta_const: float
-    _mp: dict = field(default_factory=dict, repr=False)  # 40-digit setup values for the lazy angle constants
+    _mp: dict  # 40-digit (or extended-precision) setup values for the lazy angle constants; not in the repr
+
+    #: the fields, in the order ``__init__`` takes them
+    _FIELDS = ("parameters", "initial", "kind", "roots", "m", "m1", "nutation_period", "conditioning", "motion_class",
+               "energy", "p_phi", "p_psi", "f_coefficients", "_kappa", "_v0", "_period", "_u1", "_amp",
+               "_one_minus_u2", "_one_plus_u1", "_theta_const", "_mp")
+
+    def __init__(self, parameters: dict, initial: dict, kind: str, roots: tuple[float, float, float], m: float,
+                 m1: float, nutation_period: float, conditioning: float, motion_class: str, energy: float,
+                 p_phi: float, p_psi: float, f_coefficients: tuple[float, float, float, float], _kappa: DD, _v0: DD,
+                 _period: DD | None, _u1: float, _amp: float, _one_minus_u2: float, _one_plus_u1: float,
+                 _theta_const: float, _mp: dict | None = None) -> None:
+        self.__dict__.update(
+            parameters=parameters, initial=initial, kind=kind, roots=roots, m=m, m1=m1,
+            nutation_period=nutation_period, conditioning=conditioning, motion_class=motion_class, energy=energy,
+            p_phi=p_phi, p_psi=p_psi, f_coefficients=f_coefficients, _kappa=_kappa, _v0=_v0, _period=_period,
+            _u1=_u1, _amp=_amp, _one_minus_u2=_one_minus_u2, _one_plus_u1=_one_plus_u1, _theta_const=_theta_const,
+            _mp={} if _mp is None else _mp)
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        from dataclasses import FrozenInstanceError
+
+        raise FrozenInstanceError(f"cannot assign to field {name!r}")
+
+    def __delattr__(self, name: str) -> None:
+        from dataclasses import FrozenInstanceError
+
+        raise FrozenInstanceError(f"cannot delete field {name!r}")
+
+    def _values(self) -> tuple:
+        return tuple(self.__dict__[k] for k in self._FIELDS)
+
+    def __repr__(self) -> str:
+        shown = ", ".join(f"{k}={self.__dict__[k]!r}" for k in self._FIELDS if k != "_mp")
+        return f"{type(self).__qualname__}({shown})"
+
+    def __eq__(self, other: object) -> bool:
+        if other.__class__ is not self.__class__:
+            return NotImplemented
+        return self._values() == other._values()  # type: ignore[attr-defined]
+
+    def __hash__(self) -> int:
+        return hash(self._values())
 
     @property
     def t_max(self) -> float:
