@@ -138,3 +138,15 @@ def test_a_warm_run_of_the_default_scene_imports_no_mpmath():
     report = json.loads(done.stdout.strip().splitlines()[-1])
     assert not report["mpmath"] and not report["sympy"] and not report["scipy"], report
     assert 0 < report["estimate"] < 1e-9
+
+
+def test_a_start_at_theta_pi_over_2_given_by_mgl_is_set_up_in_extended_precision():
+    # the built-in gyroscope: u0 = cos(π/2) = 6e-17 in doubles is a root; its relative error is no measure
+    params = dict(I1=0.010625, I3=0.00125, Mgl=0.981)
+    init = dict(theta=np.pi / 2, phi=0.0, psi=0.0, theta_dot=0.0, phi_dot=0.0, psi_dot=300.0)
+    top = exact_heavy_top(params, init, horizon=1.75)
+    assert "extended" in top._mp
+    ref = exact_heavy_top(params, init)
+    t = np.linspace(0.0, 1.75, 201)
+    got, want = top.evaluate(t, QUANTITIES), ref.evaluate(t, QUANTITIES)
+    assert max(_relative(got[q], want[q]) for q in QUANTITIES) <= RTOL

@@ -55,8 +55,10 @@ SAFETY = 16.0
 TOLERANCE = 1e-14
 _PARAMS = ("I1", "I3", "M", "g", "l")
 _STATE = ("theta", "theta_dot", "phi_dot", "psi_dot")
-#: the batch's checks the point must pass (its roots, period, turning angles and class)
-_CHECKED = ("nutation_period", "u1", "u2", "u3", "theta_min", "theta_max", "motion_class")
+#: the batch's checks the point must pass: its period (with the roots' errors propagated), turning angles and
+#: class.  Not u1, u2, u3 to 1e-12 relative: a root at u = 6e-17 (a start at θ = π/2 in doubles) is known to
+#: 1e-33 absolutely, which is what u(t) = u1 + (u2 − u1) sn² needs (checked below)
+_CHECKED = ("nutation_period", "theta_min", "theta_max", "motion_class")
 
 
 def _binary_checked(build):
@@ -186,10 +188,12 @@ def setup(params: Mapping[str, float], init: Mapping[str, float], horizon: float
                  + periods * 2 * _error(K, dbl["K"]))
         if not phase <= TOLERANCE * float(K):
             return None
-        # what is kept as a double: to ~1e-14 relative (then rounded as the 40-digit value is)
-        singles = [(ext[k], dbl[k]) for k in ("m", "m1", "amp", "T", "n_plus", "n_minus")]
-        singles += [(x, y) for k in ("roots", "gaps_minus", "gaps_plus") for x, y in zip(ext[k], dbl[k])]
-        if not all(_error(x, y) <= TOLERANCE * abs(float(x)) for x, y in singles):
+        # what is kept as a double: to ~1e-14 relative (then rounded as the 40-digit value is); the roots u_k
+        # relative to 1 (|u| ≤ 1 but for u3; 1 ∓ u_k, which carry the passages, relative to themselves)
+        singles = [(ext[k], dbl[k], 0.0) for k in ("m", "m1", "amp", "T", "n_plus", "n_minus")]
+        singles += [(x, y, 0.0) for k in ("gaps_minus", "gaps_plus") for x, y in zip(ext[k], dbl[k])]
+        singles += [(x, y, 1.0) for x, y in zip(ext["roots"], dbl["roots"])]
+        if not all(_error(x, y) <= TOLERANCE * max(abs(float(x)), floor) for x, y, floor in singles):
             return None
 
         Pl = [x.astype(np.longdouble) for x in P]
