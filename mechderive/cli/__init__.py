@@ -40,9 +40,17 @@ import os
 import sys
 from typing import Sequence
 
-from .. import __version__
-from ..errors import MechDeriveError
-from ..scenes.output import Terminated
+# One BLAS thread unless the user chose: NumPy's OpenBLAS starts its thread pool when NumPy is imported
+# (`import numpy` 280–325 ms with it, 185–255 ms with one thread, min–median of 10 on the loaded 2-core
+# machine; a warm `mechderive run` 495–510 → 391–434 ms), and nothing here multiplies matrices larger than
+# a few rows — sweeps spread over processes (--workers), whose BLAS threads would only contend.  Set before
+# anything below imports NumPy; the library (`import mechderive`) leaves the environment alone.
+if not any(name in os.environ for name in ("OPENBLAS_NUM_THREADS", "GOTO_NUM_THREADS", "OMP_NUM_THREADS")):
+    os.environ["OPENBLAS_NUM_THREADS"] = "1"
+
+from .. import __version__  # noqa: E402 - after the BLAS threads are set
+from ..errors import MechDeriveError  # noqa: E402
+from ..scenes.output import Terminated  # noqa: E402
 
 __all__ = ["main", "build_parser", "parse_args", "EXIT_INPUT", "EXIT_INTERNAL", "EXIT_INTERRUPTED", "EXIT_PIPE"]
 
