@@ -35,13 +35,22 @@ from __future__ import annotations
 
 import argparse
 import errno
+import functools
 import os
 import sys
 from typing import Sequence
 
-from .. import __version__
-from ..errors import MechDeriveError
-from ..scenes.output import Terminated
+# One BLAS thread unless the user chose: NumPy's OpenBLAS starts its thread pool when NumPy is imported
+# (`import numpy` 280–325 ms with it, 185–255 ms with one thread, min–median of 10 on the loaded 2-core
+# machine; a warm `mechderive run` 495–510 → 391–434 ms), and nothing here multiplies matrices larger than
+# a few rows — sweeps spread over processes (--workers), whose BLAS threads would only contend.  Set before
+# anything below imports NumPy; the library (`import mechderive`) leaves the environment alone.
+if not any(name in os.environ for name in ("OPENBLAS_NUM_THREADS", "GOTO_NUM_THREADS", "OMP_NUM_THREADS")):
+    os.environ["OPENBLAS_NUM_THREADS"] = "1"
+
+from .. import __version__  # noqa: E402 - after the BLAS threads are set
+from ..errors import MechDeriveError  # noqa: E402
+from ..scenes.output import Terminated  # noqa: E402
 
 __all__ = ["main", "build_parser", "parse_args", "EXIT_INPUT", "EXIT_INTERNAL", "EXIT_INTERRUPTED", "EXIT_PIPE"]
 
@@ -76,6 +85,27 @@ class _Parser(argparse.ArgumentParser):
             sys.stdout.write(message)
         else:
             super()._print_message(message, file)
+
+    def _get_formatter(self) -> argparse.HelpFormatter:
+        # the width argparse would take from shutil.get_terminal_size (COLUMNS, else the terminal, else 80,
+        # less 2): every add_argument makes a formatter, and importing shutil for it cost ~5 ms of each run
+        return self.formatter_class(prog=self.prog, width=_columns() - 2)
+
+
+@functools.cache
+def _columns() -> int:
+    """The terminal's width in columns as :func:`shutil.get_terminal_size` gives it, without importing shutil
+    (once per process: argparse asks at every argument it adds)."""
+    try:
+        columns = int(os.environ["COLUMNS"])
+        if columns > 0:
+            return columns
+    except (KeyError, ValueError):
+        pass
+    try:
+        return os.get_terminal_size(sys.__stdout__.fileno()).columns or 80
+    except (AttributeError, ValueError, OSError):
+        return 80
 
 
 def build_parser() -> argparse.ArgumentParser:

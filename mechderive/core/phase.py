@@ -35,10 +35,13 @@ class DD:
 
     @classmethod
     def of(cls, x) -> "DD":
-        """The double-double nearest to an mpmath number ``x`` (computed at ≥ 32 digits)."""
+        """The double-double nearest to an mpmath number ``x`` (computed at ≥ 32 digits), or the double-double
+        holding a ``numpy.longdouble`` exactly (its 11 extra bits in the low word; no mpmath imported)."""
+        hi = float(x)
+        if isinstance(x, np.floating):
+            return cls(hi, float(x - type(x)(hi)))
         import mpmath
 
-        hi = float(x)
         return cls(hi, float(x - mpmath.mpf(hi)))
 
     @classmethod

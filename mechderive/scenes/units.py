@@ -33,14 +33,20 @@ MAX_TEXT = 64
 _NUMBER = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d{1,3})?"
 _UNIT = r"[A-Za-z_µΩ°][A-Za-z_0-9µΩ°]*(?:\s*(?:\^|\*\*)\s*-?[1-9])?"
 _EXPRESSION = rf"\(?\s*{_UNIT}(?:\s*[*/ ]\s*\(?\s*{_UNIT}\s*\)?)*\s*\)?"
-_VALUE = re.compile(rf"\s*({_NUMBER})\s*({_EXPRESSION})\s*")
-_UNIT_ONLY = re.compile(rf"\s*({_EXPRESSION})\s*")
+
+
+@lru_cache(maxsize=None)
+def _pattern(which: str) -> re.Pattern:
+    """The compiled pattern of a number with a unit (``value``) or of a unit alone (``unit``): compiled on the
+    first text to look at, not on import (~3 ms of every run, which mostly has no text to convert)."""
+    expression = rf"\s*({_NUMBER})\s*({_EXPRESSION})\s*" if which == "value" else rf"\s*({_EXPRESSION})\s*"
+    return re.compile(expression)
 
 
 def is_unit_string(value: Any) -> bool:
     """Whether a scene value is text shaped as a number with a unit ("30 deg"); any other text is left to the
     key's own check, which refuses it as not a number."""
-    return isinstance(value, str) and len(value) <= MAX_TEXT and _VALUE.fullmatch(value) is not None
+    return isinstance(value, str) and len(value) <= MAX_TEXT and _pattern("value").fullmatch(value) is not None
 
 
 @lru_cache(maxsize=1)
@@ -67,7 +73,7 @@ def _radians(registry: Any, unit: Any) -> float:
 def factor_to(where: str, unit_text: str, si: str) -> float:
     """The factor from ``unit_text`` to the SI unit ``si`` (a key's or a column's); refused, naming ``where``,
     when the text is not a unit, or one of another dimension, or one that differs in radians (Hz for rad/s)."""
-    if not isinstance(unit_text, str) or len(unit_text) > MAX_TEXT or not _UNIT_ONLY.fullmatch(unit_text):
+    if not isinstance(unit_text, str) or len(unit_text) > MAX_TEXT or not _pattern("unit").fullmatch(unit_text):
         raise InvalidInputError(f"{where}: expected a unit such as \"deg\", \"rpm\", \"kg*cm^2\" (names, *, /, ^ "
                                 f"and small integer powers, at most {MAX_TEXT} characters), got {unit_text!r}")
     if si == "":
@@ -99,7 +105,7 @@ def factor_to(where: str, unit_text: str, si: str) -> float:
 
 def to_si(where: str, text: str, si: str) -> float:
     """``text`` ("30 deg") as a number in the SI unit ``si`` of the key ``where`` ("[initial].theta")."""
-    match = _VALUE.fullmatch(text) if isinstance(text, str) and len(text) <= MAX_TEXT else None
+    match = _pattern("value").fullmatch(text) if isinstance(text, str) and len(text) <= MAX_TEXT else None
     if match is None:
         raise InvalidInputError(f"{where}: expected a number, or a number with a unit such as \"30 deg\", "
                                 f"\"1000 rpm\", \"12 kg*cm^2\" (at most {MAX_TEXT} characters), got {text!r}")

@@ -79,8 +79,8 @@ def _functions() -> dict[str, Any]:
     """The derived constants compiled for NumPy (disk cache: derived and compiled once per install)."""
     from ...core.codecache import cached_lambdify
     from . import exact
-    from . import model as hm
 
+    # (the model, and SymPy with it, imported in the builds only: a warm process loads the compiled code)
     def build_state():
         args, exprs = exact._build_state()
         return args, _binary_exact(exprs)
@@ -88,15 +88,25 @@ def _functions() -> dict[str, Any]:
     def build_taylor():
         from ...core.rounding import magnitude
         from . import exact_model as em
+        from . import model as hm
 
         coeffs = list(em.model().f_taylor_state)
         return [*hm.PARAMETERS, *hm.STATE], _binary_exact(coeffs + [magnitude(c) for c in coeffs])
 
     def build_shift_values():
-        from . import exact_model as em
+        # [rate0, d_bottom, d_pole] as precession_fractions_shifted takes them: b − a u0 = φ̇0 sin²θ0 (3.74) from
+        # the state, and cos θ0 ± 1 in the half angle, exact at the poles.  Derived from a, b of the state
+        # (3.66) rather than with the partial fractions: the single-point closed form takes these for u(t)
+        # alone, which must not derive φ's fractions (laziness)
+        import sympy as sp
 
-        fr = em.model().precession_fractions_shifted
-        return [*hm.PARAMETERS, *hm.STATE], _binary_exact([fr["values"][s] for s in fr["args"][3:-2]])
+        from ...core.simplify import trig_normal
+        from . import model as hm
+
+        cfs, th = hm.model().constants_from_state, hm.STATE[0]
+        rate0 = sp.factor(trig_normal(cfs[hm.b] - cfs[hm.a] * sp.cos(th)))
+        half = {"d_bottom": 2 * sp.cos(th / 2) ** 2, "d_pole": -2 * sp.sin(th / 2) ** 2}
+        return [*hm.PARAMETERS, *hm.STATE], _binary_exact([rate0, half["d_bottom"], half["d_pole"]])
 
     def build_fractions():
         import sympy as sp
@@ -130,19 +140,33 @@ def _functions() -> dict[str, Any]:
                 raise DerivationError(f"expected κ², m of the nutation invariant under a shift of the roots, got {e}")
         return args, _binary_exact(exprs)
 
+    def build_invariants():
+        from . import model as hm
+
+        m = hm.model()
+        return [*hm.PARAMETERS, *hm.STATE], _binary_exact([m.energy, m.azimuthal_momentum, m.spin_momentum])
+
     builds = {"state": ("heavy_top.constants_from_state", build_state),
               "taylor": ("heavy_top.f_taylor_state", build_taylor),
               "shift_values": ("heavy_top.shift_values", build_shift_values),
               "fractions": ("heavy_top.precession_fractions_shifted", build_fractions),
-              "nutation": ("heavy_top.nutation_constants_shifted", build_nutation)}
-    out = {key: cached_lambdify(label, build, module="numpy")[0] for key, (label, build) in builds.items()}
+              "nutation": ("heavy_top.nutation_constants_shifted", build_nutation),
+              "invariants": ("heavy_top.invariants_state", build_invariants)}
+    return _OnDemand({key: functools.partial(cached_lambdify, label, build, module="numpy")
+                      for key, (label, build) in builds.items()})
 
-    def build_invariants():
-        m = hm.model()
-        return [*hm.PARAMETERS, *hm.STATE], _binary_exact([m.energy, m.azimuthal_momentum, m.spin_momentum])
 
-    out["invariants"] = cached_lambdify("heavy_top.invariants_state", build_invariants, module="numpy")[0]
-    return out
+class _OnDemand(dict):
+    """The compiled functions, each loaded (or derived) on its first use: the single-point closed form takes
+    the batch's nutation constants for u(t) alone, and must not derive φ's partial fractions for it (laziness)."""
+
+    def __init__(self, makers: dict) -> None:
+        super().__init__()
+        self._makers = makers
+
+    def __missing__(self, key: str) -> Any:
+        value = self[key] = self._makers[key]()[0]
+        return value
 
 
 def _binary_exact(exprs: list) -> list:
@@ -278,9 +302,14 @@ def _pipeline(F: dict, P: list, a: np.ndarray, beta: np.ndarray, shift: list[np.
     return out
 
 
-def _tier(P: list[np.ndarray], S: list[np.ndarray], names: tuple[str, ...], dtype: type
-          ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray], np.ndarray]:
-    """(values, estimates, answered) of the points (P, S) computed in ``dtype``; values and estimates as doubles."""
+def _tier(P: list[np.ndarray], S: list[np.ndarray], names: tuple[str, ...], dtype: type,
+          keep: dict | None = None) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray], np.ndarray]:
+    """(values, estimates, answered) of the points (P, S) computed in ``dtype``; values and estimates as doubles.
+
+    ``keep``, if given, receives the intermediates in ``dtype`` (a, b, α, β; the roots ``w`` of f(u0 + w);
+    u0; the shifted values; κ, m, 1 − m, K, T of the nutation): the single-point closed form's setup in
+    extended precision (:mod:`.exact_extended`) is this batch of one.  With ``keep["values_only"]`` set,
+    only those are computed (no estimates; nothing answered)."""
     F = _functions()
     P = [x.astype(dtype) for x in P]
     S = [x.astype(dtype) for x in S]
@@ -297,6 +326,13 @@ def _tier(P: list[np.ndarray], S: list[np.ndarray], names: tuple[str, ...], dtyp
         rate0, d_bottom, d_pole = shift
         u0 = np.cos(S[0])
         w, last_step = _roots(c, -d_bottom, -d_pole)
+        want_advance = any(k in names for k in ("mean_precession_rate", "precession_per_nutation"))
+        base = _pipeline(F, P, a, beta, shift, w, want_advance)
+        if keep is not None:
+            keep.update(a=a, b=b, alpha=alpha, beta=beta, w=w, u0=u0, rate0=rate0, d_bottom=d_bottom, d_pole=d_pole,
+                        **{k: base[k] for k in ("kappa", "m", "m1", "K", "T")})
+            if keep.get("values_only"):  # the same values in another precision, to compare with: no estimates
+                return values, errors, np.zeros(n, dtype=bool)
         # f's rounding noise at each root, from the sizes of its coefficients' terms (8ε each); f shifted up and
         # down by the noise at the turning points widens and narrows the motion, u1, u2 and u3 consistently
         absw = np.abs(w)
@@ -307,8 +343,6 @@ def _tier(P: list[np.ndarray], S: list[np.ndarray], names: tuple[str, ...], dtyp
         moved = [_newton([c[0], c[1], c[2], c[3] + sign * near], w)[0] for sign in (1, -1)]
         dw = (np.max([np.abs(x - w) for x in moved], axis=0) + noise / slope + 2 * last_step).astype(float)
         amp = (w[:, 1] - w[:, 0]).astype(float)
-        want_advance = any(k in names for k in ("mean_precession_rate", "precession_per_nutation"))
-        base = _pipeline(F, P, a, beta, shift, w, want_advance)
         others = [_pipeline(F, P, a, beta, shift, x, want_advance) for x in moved]
 
         def propagated(key: str) -> np.ndarray:

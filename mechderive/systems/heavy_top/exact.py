@@ -53,10 +53,9 @@ from __future__ import annotations
 
 import functools
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, Mapping
 
-import mpmath
 import numpy as np
 
 from ...core.validate import as_finite_array
@@ -65,7 +64,6 @@ from ...core.codecache import cached_lambdify
 from ...kinematics.rotations import angular_velocity_body, rotation_matrix
 from ...core.phase import DD, mod_two_pi
 from ...special._doubledouble import dd_add, two_prod
-from ...special.highprec import complete_pi_mp
 from .parameters import check_initial, check_params
 
 __all__ = ["HeavyTopSolution", "exact_heavy_top"]
@@ -108,6 +106,8 @@ NUTATION_BUILDS = (("heavy_top.constants_from_state", _build_state), ("heavy_top
 @functools.cache
 def _nutation_functions():
     """The derived constants of u(t) as mpmath functions, compiled once (through the disk cache)."""
+    import mpmath  # noqa: F401 - the compiled functions run in its namespace
+
     state, gaps, cubic, nutation = (cached_lambdify(label, build, module="mpmath")[0]
                                     for label, build in NUTATION_BUILDS)
     return {"state": state, "f": cubic, "nutation": nutation, "gaps": gaps}
@@ -118,8 +118,11 @@ def angle_function_jobs(*, angles: bool = True, rates: bool = True) -> list[tupl
     (:func:`_angle_functions`, with ``angles``) and the rates near the poles (:func:`_derived_rates`, with
     ``rates``: φ̇, ψ̇ and the angles' error estimate), for :func:`mechderive.core.codecache.prefetch`: a cold
     start derives them on a second core while this one derives u(t)'s constants."""
-    jobs = [(f"heavy_top.{which}", _fraction_build(which), "mpmath")
-            for which in ("precession_fractions", "spin_fractions")] if angles else []
+    from .exact_extended import fraction_jobs
+
+    # the partial fractions as the extended-precision setup takes them (:mod:`.exact_extended`, the warm
+    # run's path); the 40-digit path compiles its mpmath ones when it is taken
+    jobs = fraction_jobs() if angles else []
     return jobs + ([("heavy_top.rates_near_poles", _rates_build, "numpy")] if rates else [])
 
 
@@ -522,7 +525,6 @@ QUANTITIES = ("u", "u_dot", "theta", "theta_dot", "phi", "psi", "phi_wrapped", "
               "R", "apex", "omega")
 
 
-@dataclass(frozen=True)
 class HeavyTopSolution:
     """The closed-form motion of one heavy symmetric top; methods take arrays of times (s).
 
@@ -534,6 +536,9 @@ class HeavyTopSolution:
     Only what is asked for is computed: θ(t) needs sn, cn of the reduced phase; φ(t) and ψ(t)
     need the amplitude and Π, and their constants (including the partial fractions of φ̇, ψ̇)
     are derived and computed on the first request for either.
+
+    Immutable, with the ``__init__``, ``repr`` and ``==`` a frozen dataclass would have: written out,
+    because generating those methods (one ``exec`` each) took ~3 ms of every warm ``mechderive run``.
     """
 
     parameters: dict
@@ -557,7 +562,49 @@ class HeavyTopSolution:
     _one_minus_u2: float
     _one_plus_u1: float
     _theta_const: float
-    _mp: dict = field(default_factory=dict, repr=False)  # 40-digit setup values for the lazy angle constants
+    _mp: dict  # 40-digit (or extended-precision) setup values for the lazy angle constants; not in the repr
+
+    #: the fields, in the order ``__init__`` takes them
+    _FIELDS = ("parameters", "initial", "kind", "roots", "m", "m1", "nutation_period", "conditioning", "motion_class",
+               "energy", "p_phi", "p_psi", "f_coefficients", "_kappa", "_v0", "_period", "_u1", "_amp",
+               "_one_minus_u2", "_one_plus_u1", "_theta_const", "_mp")
+
+    def __init__(self, parameters: dict, initial: dict, kind: str, roots: tuple[float, float, float], m: float,
+                 m1: float, nutation_period: float, conditioning: float, motion_class: str, energy: float,
+                 p_phi: float, p_psi: float, f_coefficients: tuple[float, float, float, float], _kappa: DD, _v0: DD,
+                 _period: DD | None, _u1: float, _amp: float, _one_minus_u2: float, _one_plus_u1: float,
+                 _theta_const: float, _mp: dict | None = None) -> None:
+        self.__dict__.update(
+            parameters=parameters, initial=initial, kind=kind, roots=roots, m=m, m1=m1,
+            nutation_period=nutation_period, conditioning=conditioning, motion_class=motion_class, energy=energy,
+            p_phi=p_phi, p_psi=p_psi, f_coefficients=f_coefficients, _kappa=_kappa, _v0=_v0, _period=_period,
+            _u1=_u1, _amp=_amp, _one_minus_u2=_one_minus_u2, _one_plus_u1=_one_plus_u1, _theta_const=_theta_const,
+            _mp={} if _mp is None else _mp)
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        from dataclasses import FrozenInstanceError
+
+        raise FrozenInstanceError(f"cannot assign to field {name!r}")
+
+    def __delattr__(self, name: str) -> None:
+        from dataclasses import FrozenInstanceError
+
+        raise FrozenInstanceError(f"cannot delete field {name!r}")
+
+    def _values(self) -> tuple:
+        return tuple(self.__dict__[k] for k in self._FIELDS)
+
+    def __repr__(self) -> str:
+        shown = ", ".join(f"{k}={self.__dict__[k]!r}" for k in self._FIELDS if k != "_mp")
+        return f"{type(self).__qualname__}({shown})"
+
+    def __eq__(self, other: object) -> bool:
+        if other.__class__ is not self.__class__:
+            return NotImplemented
+        return self._values() == other._values()  # type: ignore[attr-defined]
+
+    def __hash__(self) -> int:
+        return hash(self._values())
 
     @property
     def t_max(self) -> float:
@@ -579,14 +626,42 @@ class HeavyTopSolution:
 
     @functools.cached_property
     def _angles(self) -> dict[str, _Angle]:
+        if "extended" in self._mp:
+            # set up in extended precision (:mod:`.exact_extended`): φ and ψ's constants too, where their
+            # measured errors allow; else the 40-digit motion's (its phase agrees with this one's to 1e-14·K)
+            from .exact_extended import angle_constants
+
+            got = angle_constants(self)
+            if got is not None:
+                return _angle_setup(self, *got)
+            precise = self.precise()
+            angles = precise._angles
+            self._mp["one_minus_n"] = precise._mp.get("one_minus_n", {})
+            return angles
+        import mpmath
+
         with mpmath.workdps(self._mp.get("dps", _DPS)):
             return _angle_setup(self)
 
     @functools.cached_property
     def _per_period_precise(self) -> dict[str, DD]:
         """The advance of φ and ψ per nutation period at 40 digits (double-double)."""
+        import mpmath
+
         with mpmath.workdps(self._mp.get("dps", _DPS)):
             return _precise_advance(self)
+
+    def precise(self) -> "HeavyTopSolution":
+        """This motion set up at 40 digits: itself, unless it was set up in extended precision
+        (:mod:`.exact_extended`; then the 40-digit setup is made on the first call, and kept)."""
+        if "extended" not in self._mp:
+            return self
+        if "precise" not in self._mp:
+            import mpmath
+
+            with mpmath.workdps(_DPS):
+                self._mp["precise"] = _setup(self.parameters, self.initial)
+        return self._mp["precise"]
 
     def _pi_series(self) -> Any:
         """The Fourier series of Π(n; am u | m) for the characteristics n± not close to 1 (fitted once
@@ -602,6 +677,8 @@ class HeavyTopSolution:
     @functools.cached_property
     def _angle_fractions(self) -> dict[str, tuple]:
         """Per angle: (c0, [(c_i, n_i) kept]) of the partial fractions of φ̇, ψ̇ at 40 digits."""
+        import mpmath
+
         with mpmath.workdps(self._mp.get("dps", _DPS)):
             return _kept_fractions(self)
 
@@ -861,7 +938,7 @@ def classify(u1: float, u2: float, a: float, b: float, *, rtol: float = 1e-12) -
 
 
 def exact_heavy_top(parameters: Mapping[str, float], initial: Mapping[str, float], *,
-                    strict: bool = True) -> HeavyTopSolution:
+                    strict: bool = True, horizon: float | None = None) -> HeavyTopSolution:
     """The closed-form motion of a heavy symmetric top.
 
     Parameters
@@ -871,6 +948,9 @@ def exact_heavy_top(parameters: Mapping[str, float], initial: Mapping[str, float
     initial : ``theta phi psi theta_dot phi_dot psi_dot`` (rad, rad/s) at t = 0.
     strict : ``False`` accepts a top no rigid body is (I1 - M l² < I3/2); see
         :func:`~mechderive.systems.heavy_top.parameters.check_params`.
+    horizon : the largest |t| (s) the motion will be evaluated at, if known: the constants are then set up
+        in extended precision where their measured errors over that span allow (:mod:`.exact_extended`,
+        no mpmath), else at 40 digits as without it.
 
     >>> top = exact_heavy_top(dict(I1=1.0, I3=0.5, M=0.1, g=10.0, l=1.0),
     ...                       dict(theta=0.5, phi=0.0, psi=0.0, theta_dot=0.0, phi_dot=0.0, psi_dot=5.0))
@@ -891,11 +971,19 @@ def exact_heavy_top(parameters: Mapping[str, float], initial: Mapping[str, float
                                     f"the top is free: use the free_top system), got {float(np.min(v)):g}")
     if any(np.ndim(v) for v in (*params.values(), *init.values())):
         raise InvalidInputError("expected scalar parameters and initial values for one closed-form motion, got arrays")
+    if horizon is not None:
+        from .exact_extended import setup
+
+        top = setup(params, init, horizon, strict=strict, mgl="Mgl" in parameters)
+        if top is not None:
+            return top
+    import mpmath
+
     with mpmath.workdps(_DPS):
         return _setup(params, init)
 
 
-def _real_roots(coeffs: list, known: mpmath.mpf | None = None) -> list:
+def _real_roots(coeffs: list, known: "mpmath.mpf | None" = None) -> list:
     """The three real roots of the cubic f(u) (coefficients of u³, u², u, 1), sorted, at 40 digits.
 
     With a known root (a top started at a turning point, θ̇ = 0) the cubic is deflated and the
@@ -903,6 +991,8 @@ def _real_roots(coeffs: list, known: mpmath.mpf | None = None) -> list:
     method at 40 digits, falling back to mpmath's polyroots when two roots nearly coincide
     (where Newton's convergence is slow).
     """
+    import mpmath
+
     c3, c2, c1, c0 = coeffs
     if known is not None:
         # f(u) = (u - u0)(c3 u² + b2 u + b1): synthetic division
@@ -959,6 +1049,8 @@ def _quadratic_roots(a, b, c) -> list | None:
 
     A discriminant negative by the working precision's rounding only is a double root.
     """
+    import mpmath
+
     disc = b * b - 4 * a * c
     if disc < 0 and disc > -mpmath.mpf(10) ** (-mpmath.mp.dps + 5) * (b * b + abs(4 * a * c)):
         disc = mpmath.mpf(0)  # a double root, up to the 40-digit rounding
@@ -979,6 +1071,8 @@ _UNDERFLOW = 1e-150
 
 
 def _setup(params: dict, init: dict) -> HeavyTopSolution:
+    import mpmath
+
     f = _nutation_functions()
     mp = mpmath.mpf
     P = [mp(params[k]) for k in ("I1", "I3", "M", "g", "l")]
@@ -1114,6 +1208,8 @@ def _refuse_too_close(gap, where: str) -> None:
     by O(1) in a time that no double resolves — a steady approximation would be wrong for them.
     """
     if 0 < gap < _UNDERFLOW:
+        import mpmath
+
         raise InvalidInputError(
             f"expected the apex to stay at least ~1e-75 rad from the {where} unless it passes through it exactly "
             f"(1 ∓ cos θ ≥ 1e-150: below, Carlson's integrals of the passage under- or overflow in double "
@@ -1126,7 +1222,7 @@ def _passage_sign(value, slope, theta_dot) -> float:
     """The sign making √(amp)·value (sin θ/2 at a pole passage, cos θ/2 at a bottom passage) start
     with the sign of the initial state: positive where value ≠ 0; at a start on the pole/bottom
     itself, the sign that makes θ move as θ̇0 says (value changes like ``slope``)."""
-    if value != 0 and abs(value) > mpmath.mpf(10) ** (-_DPS // 2):
+    if value != 0 and abs(value) > 10.0 ** (-_DPS // 2):
         return 1.0 if value > 0 else -1.0
     if theta_dot == 0 or slope == 0:
         return 1.0
@@ -1139,6 +1235,8 @@ def _fractions(f, args: tuple) -> list:
     try:
         return list(f(*args))
     except ZeroDivisionError:
+        import mpmath
+
         I1, I3, a, b, u1, u2, u3 = args
         eps = mpmath.mpf(10) ** (-_DPS)
         near = list(f(I1, I3, a, b, u1 + eps if u1 == -1 else u1, u2 - eps if u2 == 1 else u2, u3))
@@ -1154,6 +1252,8 @@ def _kept_fractions(sol: HeavyTopSolution) -> dict[str, tuple]:
     At 40 digits (more near a passage, see :func:`_setup`).  At an exact passage (b = ±a) the
     n₊ (n₋) term is absent: its coefficient vanishes and it is dropped.
     """
+    import mpmath
+
     v = sol._mp
     f = _angle_functions()
     frac_args = (v["I1"], v["I3"], v["a"], v["b"], *v["roots"])
@@ -1166,23 +1266,26 @@ def _kept_fractions(sol: HeavyTopSolution) -> dict[str, tuple]:
     return out
 
 
-def _angle_setup(sol: HeavyTopSolution) -> dict[str, _Angle]:
+def _angle_setup(sol: HeavyTopSolution, fractions: dict | None = None, one_minus_n: dict | None = None,
+                 advances: dict | None = None) -> dict[str, _Angle]:
     """Constants of φ(t) and ψ(t), for the first request of either.
 
     The partial-fraction coefficients and the advance per nutation period come from 40-digit
     arithmetic (more near a passage, see :func:`_setup`): the advance multiplies the period count
     j, so its double rounding would grow like j·ulp.  Π(n; am r0 | m) at the start is evaluated as
-    every sample's Π is (double precision, from the phase at t = 0).
+    every sample's Π is (double precision, from the phase at t = 0).  ``fractions``, ``one_minus_n`` (1 − n
+    per n) and ``advances`` (per angle): given by the extended-precision setup (:mod:`.exact_extended`).
     """
     if sol.kind == "steady":
         return {k: _Angle(k, sol.initial[k], 0.0, (), None, sol.initial[k + "_dot"]) for k in ("phi", "psi")}
     v = sol._mp
     kappa = v["kappa"]
-    fractions = sol._angle_fractions
+    fractions = sol._angle_fractions if fractions is None else fractions
     # φ and ψ share their characteristics n±: one vectorised Π call for all of them
     ns = sorted({n for _, kept in fractions.values() for _, n in kept})
     for n in ns:
-        sol._mp.setdefault("one_minus_n", {})[float(n)] = float(1 - n)  # to full relative accuracy
+        # to full relative accuracy
+        sol._mp.setdefault("one_minus_n", {})[float(n)] = float(1 - n if one_minus_n is None else one_minus_n[n])
     # Π(n; am r0 | m) at the phase of t = 0 by the very path every sample takes: φ(0) = φ0 and
     # ψ(0) = ψ0 to rounding, also where Π is huge (n → 1 near the pole, ~1/√(1 - n)) or
     # ill-conditioned in the amplitude (m → 1: Π(n; A | m) from a rounded A0 next to π/2 erred
@@ -1194,7 +1297,7 @@ def _angle_setup(sol: HeavyTopSolution) -> dict[str, _Angle]:
     for name in ("phi", "psi"):
         c0, kept = fractions[name]
         terms = tuple((float(c / kappa), float(n), pi0[n]) for c, n in kept)
-        advance = sol._per_period_precise[name] if sol._period is not None else None
+        advance = None if sol._period is None else (sol._per_period_precise if advances is None else advances)[name]
         out[name] = _Angle(name, float(sol.initial[name]), float(c0 / kappa), terms, advance, 0.0)
     return out
 
@@ -1206,6 +1309,8 @@ def _precise_advance(sol: HeavyTopSolution) -> dict[str, DD]:
     float(n₊) it would carry 1e-16/(1 - n₊): 8e-8 rad per period in φ - ψ at 1 - n₊ = 5e-10),
     which the working precision gives.
     """
+    from ...special.highprec import complete_pi_mp
+
     v = sol._mp
     kappa, K = v["kappa"], v["K"]
     complete: dict = {}  # φ and ψ share their characteristics n±

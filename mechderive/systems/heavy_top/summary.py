@@ -69,7 +69,7 @@ def _closed_form(scene: "Scene", solved: Solved | None) -> tuple[Any, str]:
     from .exact import HeavyTopSolution, exact_heavy_top
 
     if solved is not None and isinstance(solved.solution, HeavyTopSolution):
-        return solved.solution, ""
+        return solved.solution.precise(), ""  # the summaries are formed at 40 digits
     try:
         return exact_heavy_top(scene.parameters, scene.initial, strict=scene.strict), ""
     except InvalidInputError as exc:

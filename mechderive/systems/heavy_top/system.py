@@ -225,7 +225,10 @@ def _exact(scene: "Scene", t: np.ndarray) -> Solved:
 
         prefetch(angle_function_jobs(angles=angles))
     try:
-        top = exact_heavy_top(scene.parameters, scene.initial, strict=scene.strict)
+        # over the scene's span the constants are set up in extended precision where their measured errors
+        # allow (no mpmath imported: most of a warm run's solve stage was mpmath's import and 40-digit setup)
+        top = exact_heavy_top(scene.parameters, scene.initial, strict=scene.strict,
+                              horizon=float(np.max(np.abs(t))) if t.size else 0.0)
     except InvalidInputError as exc:
         raise OutOfReach(f"{keys_text('initial', _STATE_KEYS)} (with the parameters): {exc}") from exc
     if t[-1] > top.t_max:
