@@ -372,7 +372,10 @@ class ClosedMotion:
         from ...solvers.quadrature_motion import REFERENCE_DPS as DPS
 
         t = np.asarray(t, dtype=float)
-        picks = np.unique(np.linspace(0, len(t) - 1, min(len(t), 6)).astype(int))
+        # the last time and five by the golden ratio's multiples: equally spaced picks can all fall on whole
+        # periods, where a libration started at its fold is ~0 and its rounding invisible
+        golden = (np.arange(1, 6) * 0.6180339887498949) % 1.0
+        picks = np.unique(np.concatenate([(golden * (len(t) - 1)).astype(int), [len(t) - 1]]))
         ts = t[picks]
         got = self.columns(ts, wanted)
         mo = self.motion

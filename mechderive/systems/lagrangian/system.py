@@ -285,6 +285,10 @@ class LagrangianSystem(System):
                         *(q + "_dot" for q in d.coordinates)]
         cols = motion.columns(t, state_wanted)
         estimate, per_column = motion.estimate(t, [w for w in state_wanted if w in wanted or needs_angles])
+        # never below the rounding of each column's own size (the sampled times may all sit where it is small)
+        for name in per_column:
+            per_column[name] = max(per_column[name], 4 * 2.0**-52 * float(np.max(np.abs(cols[name]))))
+        estimate = max([per_column[n] for n in per_column if n in wanted] + [estimate])
         names = [*d.coordinates, *(q + "_dot" for q in d.coordinates)]
         # a cyclic angle nobody asked for stays at its start: the invariants do not depend on it
         y = np.column_stack([np.broadcast_to(cols[n] if n in cols else float(scene.initial[n]), t.shape)
