@@ -239,12 +239,30 @@ register(Claim(
     check=_check_3_73,
 ))
 
+def _generic_rate(m, name: str) -> sp.Expr:
+    """ċ(u) of the cyclic coordinate ``name`` found by the generic recipe (:func:`mechderive.core.quadrature.cyclic_rates`,
+    which the closed form of any Lagrangian integrates by partial fractions and Π), in a, b by (3.66)."""
+    from ..core.quadrature import cyclic_rates, find_substitution, reduce_to_quadrature
+
+    found = find_substitution(reduce_to_quadrature(m))
+    entry = cyclic_rates(m, found).get(name)
+    if found.name != "u = cos q" or entry is None or isinstance(entry, str):
+        return sp.nan
+    N, D = entry
+    sym = {x.name: x for x in N.free_symbols | D.free_symbols}
+    in_ab = {sym[k]: v for k, v in (("p_phi", I1 * b), ("p_psi", I1 * a)) if k in sym}
+    return (N.as_expr() / D.as_expr()).subs(in_ab).subs(found.variable, u)
+
+
 register(Claim(
     "3.74", SECTION,
     "φ̇ = (b − au)/(1 − u²)",
     "symbolic",
     printed=lambda: (b - a * u) / (1 - u**2),
-    check=lambda f: same(f, _m().precession_rate_u, "φ̇(u) vs (3.67) at cos θ = u"),
+    check=lambda f: all_pass([
+        same(f, _m().precession_rate_u, "φ̇(u) vs (3.67) at cos θ = u"),
+        same(f, _generic_rate(_m(), "phi"), "φ̇(u) vs the generic reduction's rate of φ (core.quadrature)"),
+    ]),
 ))
 
 register(Claim(
@@ -252,7 +270,10 @@ register(Claim(
     "ψ̇ = I1a/I3 − u(b − au)/(1 − u²)",
     "symbolic",
     printed=lambda: I1 * a / I3 - u * (b - a * u) / (1 - u**2),
-    check=lambda f: same(f, _m().spin_rate_u, "ψ̇(u) vs (3.68) at cos θ = u"),
+    check=lambda f: all_pass([
+        same(f, _m().spin_rate_u, "ψ̇(u) vs (3.68) at cos θ = u"),
+        same(f, _generic_rate(_m(), "psi"), "ψ̇(u) vs the generic reduction's rate of ψ (core.quadrature)"),
+    ]),
 ))
 
 
