@@ -283,6 +283,7 @@ class LagrangianSystem(System):
         needs_angles = any(w in expr_names for w in wanted)
         state_wanted = [*(q for q in d.coordinates if q in wanted or needs_angles or q == motion.remaining),
                         *(q + "_dot" for q in d.coordinates)]
+        # the scene's initial values are at t = 0 whatever its output times (t_start, times)
         cols = motion.columns(t, state_wanted)
         estimate, per_column = motion.estimate(t, [w for w in state_wanted if w in wanted or needs_angles])
         # never below the rounding of each column's own size (the sampled times may all sit where it is small)
@@ -295,8 +296,14 @@ class LagrangianSystem(System):
                              for n in names] + ([t] if d.uses_time else []))
         p = [scene.parameters[n] for n in d.dynamics_parameters]
         run = ExactRun(t, y, eq.term.invariant_names, eq.term.invariant_function()(*p, *y.T))
-        # the closed form checks itself: its angles against its rates, its invariants against their start
+        # the closed form checks itself: its start against the scene's, its angles against its rates, its
+        # invariants against their start
         failed = motion.check_derivatives(t, [n for n in names if n in cols])
+        start = motion.columns(np.zeros(1), [n for n in names if n in cols])
+        for name, value in start.items():
+            given = float(scene.initial[name])
+            if not abs(value[0] - given) <= 1e-9 * max(1.0, abs(given), float(np.max(np.abs(cols[name])))):
+                failed = failed or f"{name} starts at {value[0]:.12g}, not at the scene's {given:.12g}"
         for name in eq.conserved_names:
             values, scale = run.invariant(name), float(np.max(np.abs(run.invariant(f"scale_{name}"))))
             moved = float(np.max(np.abs(values - values[0])))
