@@ -6,8 +6,9 @@ The recipe, each step derived:
 1. Routh-reduce by the cyclic coordinates and find u = g(q) with u̇² = P(u), deg P ≤ 4
    (:func:`mechderive.core.quadrature.find_substitution`); ċ = R_c(u), rational
    (:func:`~mechderive.core.quadrature.cyclic_rates`).
-2. The constants of this motion — E, the p_c, the parameters — enter P and R_c at 40 digits from the
-   start's doubles; u(t) = M(sn²(κ t + v_s | m)) (:func:`mechderive.solvers.quadrature_motion.elliptic_motion`).
+2. The constants of this motion — E, the p_c, the parameters — enter P and R_c at 60 digits from the
+   start's doubles (taken as exact; the initial values are at t = 0); u(t) = M(sn²(κ t + v_s | m))
+   (:func:`mechderive.solvers.quadrature_motion.elliptic_motion`, at 40 digits or more near a steady motion).
 3. q from u on the right branch of g⁻¹.  Where the motion reaches a *fold* of g (g'(q) = 0: u = cos q at
    q = 0 or π) q passes through while u turns back, so q is read from the signed distance σ = ±√|u − u_e|
    (sn or cn of the same argument), in which it is smooth: q − q_e = s·asin(σ/√2) for u = cos q
@@ -16,11 +17,13 @@ The recipe, each step derived:
 4. c(t) = c0 + ∫ R_c(u) dt by partial fractions in w = sn² and Π
    (:func:`~mechderive.solvers.quadrature_motion.rate_integral`).
 
-The error estimate is measured on the run: at up to 6 sample times (the last included) every output is
-evaluated again from the Jacobi functions and Π at 30 digits (mpmath), and the largest difference is
-reported; the run is refused (:class:`~mechderive.systems.base.OutOfReach`, so ``method = "auto"``
-integrates instead) if the conserved quantities evaluated on the closed form drift by more than that
-estimate allows.
+The error estimate is measured on the run: at the last output time and five more (picked by the golden
+ratio, never all on whole periods) every output is evaluated again from the Jacobi functions and Π at 30
+digits (mpmath); the largest difference, and never less than the rounding of each column's size, is
+reported.  The run checks itself and is refused (:class:`~mechderive.systems.base.OutOfReach`, so
+``method = "auto"`` integrates instead, saying why) where its start differs from the scene's, an angle's
+central difference disagrees with its rate, or a conserved quantity evaluated on it drifts by more than
+1e-9 of its scale — a wrong branch, fold or sign is never a silent answer.
 """
 
 from __future__ import annotations
