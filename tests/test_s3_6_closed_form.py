@@ -490,3 +490,23 @@ def test_any_spherical_pendulum_is_right_to_its_estimate_or_refused(theta0, thet
     ref = _bob_reference(theta0, theta_dot0, phi_dot0, t)
     ref_error = np.max(np.abs(ref - _bob_reference(theta0, theta_dot0, phi_dot0, t, tol=1e-11)))
     assert np.max(np.abs(bob - ref)) <= 1e-10 + 10 * ref_error + 4 * estimate
+
+
+@settings(max_examples=20, deadline=None, derandomize=True)
+@given(roots=st.lists(st.floats(-3.0, 3.0), min_size=3, max_size=4, unique=True), lead=st.sampled_from([-1.0, 1.0]),
+       where=st.floats(0.05, 0.95), direction=st.sampled_from([-1, 0, 1]))
+def test_u_of_t_for_random_real_roots(roots, lead, where, direction):
+    """Random cubics and quartics with real roots: u(t) from a start inside each bounded interval of motion
+    (a fraction ``where`` across it; direction 0 starts at its lower root) against the ODE reference."""
+    roots = sorted(roots)
+    if min(np.diff(roots)) < 0.05:
+        return  # nearly double roots: the steady and separatrix limits have tests of their own
+    coeffs = lead * np.poly(roots)
+    for lo, hi in zip(roots, roots[1:]):
+        if lead * np.polyval(np.poly(roots), (lo + hi) / 2) <= 0:
+            continue  # P < 0 here: no motion
+        u0 = lo if direction == 0 else lo + where * (hi - lo)
+        motion = elliptic_motion(coeffs, u0, direction)
+        t = np.linspace(0.0, 2.5 * float(motion.u_period), 101)
+        ref, _ = _ode_reference(coeffs, u0, direction, t)  # direction 0: u̇(0) = 0, a turning point
+        assert np.max(np.abs(motion.u(t) - ref)) <= 1e-8 * (1 + np.max(np.abs(ref))), (roots, lead, lo, hi)
