@@ -319,7 +319,7 @@ class _Estimator:
         derived rate over the phase (:meth:`_cumulative`), plus the rounding of what is output."""
         from .exact import _Pass
 
-        sol, ps, t = self.sol, self.ps, self.t
+        sol, ps = self.sol, self.ps
         if sol._period is None:  # m = 1 exactly (no period): no quadrature in the phase; say so
             return {"continuous": math.inf, "wrapped": math.inf}
         reduced = which in ("sigma", "delta")
