@@ -405,7 +405,8 @@ class LagrangianSystem(System):
     def summarize(self, scene: "Scene", solved: Solved, t: "np.ndarray",
                   names: tuple[str, ...]) -> dict[str, tuple[Any, Any]]:
         """``period`` of the reduced motion (non-cyclic q and every q̇): in closed form where L reduces to
-        u̇² = P(u) with P of degree ≤ 4 (:mod:`mechderive.core.quadrature`), else measured on the trajectory;
+        u̇² = P(u) with P of degree ≤ 4 (:mod:`.closed`, cross-checked against the period measured on the
+        trajectory), else measured; the turning points and per-period advances (:meth:`_closed_summaries`);
         the conserved quantities' values (:mod:`..summaries`)."""
         import numpy as np
 
@@ -432,14 +433,12 @@ class LagrangianSystem(System):
                     measured = period_of(np.asarray(traj.t), np.asarray(traj.y)[:, columns], errors)
                     out["period"] = measured if closed[0] is None else _checked(closed, measured)
             else:
-                closed = self._closed_period(scene, drifts)
                 measured = period_of(np.asarray(traj.t), np.asarray(traj.y)[:, columns], errors)
-                out["period"] = measured if closed is None else _checked(closed, measured)
+                if self.reduction()[0] is None:
+                    out["period"] = measured
+                else:
+                    out["period"] = _checked(self._closed_summaries(scene, drifts, ["period"])["period"], measured)
         return {name: out[name] for name in names}
-
-    def _substitution(self) -> Any:
-        """The reduction to u̇² = P(u) (:mod:`mechderive.core.quadrature`), or None where there is none (cached)."""
-        return self.reduction()[0]
 
     def reduction(self, along: str | None = None) -> tuple[Any, str | None]:
         """(substitution, None), or (None, the reason there is none): the reduction to u̇² = P(u), or with ``along``
@@ -473,45 +472,6 @@ class LagrangianSystem(System):
 
             self.__dict__["_rates"] = cyclic_rates(self.reduced_model(), self.reduction()[0])
         return self.__dict__["_rates"]
-
-    def _closed_period(self, scene: "Scene", drifts: dict) -> tuple[Any, Any] | None:
-        """(period, estimate) from the elliptic reduction where the system has one, else None (measured instead).
-
-        The constants E and p_c are the run's own values at t = 0, evaluated from the start's doubles; the
-        estimate is how far the period moves when E does by that evaluation's rounding (8ε × the size of E's
-        terms), on top of the closed form's 40-digit evaluation.  A motion the recipe finds not periodic
-        gives its reason.
-        """
-        found = self._substitution()
-        if found is None:
-            return None
-        from ...core.quadrature import NoSubstitution, oscillation
-
-        d = self.definition
-        values: dict = {}
-        for sym in found.polynomial.free_symbols - {found.variable}:
-            if sym.name == "E":
-                values[sym] = drifts["energy"].start
-            elif sym.name in drifts:
-                values[sym] = drifts[sym.name].start
-            elif sym.name in scene.parameters:
-                values[sym] = scene.parameters[sym.name]
-            else:
-                return None
-        coordinate = d.coordinates[self.equations.lagrangian_model.coordinates.index(
-            next(q for q in self.equations.lagrangian_model.remaining_coordinates))]
-        q0 = float(scene.initial[coordinate])
-        energy = next((s for s in values if s.name == "E"), None)
-        if energy is None:
-            return None
-        try:
-            base = oscillation(found, values, q0)
-            # E at t = 0 from the doubles of the start: its rounding, ~ε × the size of its terms
-            shift = 8 * 2.0**-52 * max(float(drifts["energy"].scale), abs(float(values[energy])))
-            moved = oscillation(found, {**values, energy: values[energy] + shift}, q0)
-        except NoSubstitution as exc:
-            return None, f"{exc} ({found.name})"
-        return float(base.period), float(abs(moved.period - base.period)) + 2.0**-52 * float(base.period)
 
     def _closed_summaries(self, scene: "Scene", drifts: dict, names: list[str]) -> dict:
         """The turning points and per-period advances from the closed form (:mod:`.closed`), each with the change
