@@ -67,6 +67,8 @@ class ExactRun:
     invariant_names: tuple
     values: Any
     component_error: Any = None
+    #: the :class:`ClosedMotion` (its summaries reuse it)
+    motion: Any = None
 
     def invariant(self, name: str) -> np.ndarray:
         return np.broadcast_to(np.asarray(self.values[self.invariant_names.index(name)], float), self.t.shape)

@@ -295,7 +295,7 @@ class LagrangianSystem(System):
         y = np.column_stack([np.broadcast_to(cols[n] if n in cols else float(scene.initial[n]), t.shape)
                              for n in names] + ([t] if d.uses_time else []))
         p = [scene.parameters[n] for n in d.dynamics_parameters]
-        run = ExactRun(t, y, eq.term.invariant_names, eq.term.invariant_function()(*p, *y.T))
+        run = ExactRun(t, y, eq.term.invariant_names, eq.term.invariant_function()(*p, *y.T), motion=motion)
         # the closed form checks itself: its start against the scene's, its angles against its rates, its
         # invariants against their start
         failed = motion.check_derivatives(t, [n for n in names if n in cols])
@@ -416,8 +416,11 @@ class LagrangianSystem(System):
         reduced = {q.name for q in self.summaries[1:] if q.name.endswith(("_min", "_max", "_per_period"))}
         out = invariants_of(drifts, tuple(n for n in names if n != "period" and n not in reduced),
                             "the Lagrangian depends on t")
-        if reduced & set(names):
-            out.update(self._closed_summaries(scene, drifts, [n for n in names if n in reduced]))
+        # every closed-form summary from one pair of motions (the run's own, where it was the closed form)
+        closed_names = [n for n in names if n in reduced or n == "period" and self.reduction()[0] is not None]
+        closed_out = self._closed_summaries(scene, drifts, closed_names, getattr(solved.solution, "motion", None)) \
+            if closed_names else {}
+        out.update({n: v for n, v in closed_out.items() if n != "period"})
         if "period" in names:
             traj, n = solved.solution, len(self.definition.coordinates)
             keep = [i for i, q in enumerate(self.definition.coordinates) if q not in self.equations.cyclic]
@@ -429,7 +432,7 @@ class LagrangianSystem(System):
                 if found is None:
                     out["period"] = (None, f"the Lagrangian depends on t: the motion need not repeat ({why})")
                 else:
-                    closed = self._closed_summaries(scene, drifts, ["period"])["period"]
+                    closed = closed_out["period"]
                     measured = period_of(np.asarray(traj.t), np.asarray(traj.y)[:, columns], errors)
                     out["period"] = measured if closed[0] is None else _checked(closed, measured)
             else:
@@ -437,7 +440,7 @@ class LagrangianSystem(System):
                 if self.reduction()[0] is None:
                     out["period"] = measured
                 else:
-                    out["period"] = _checked(self._closed_summaries(scene, drifts, ["period"])["period"], measured)
+                    out["period"] = _checked(closed_out["period"], measured)
         return {name: out[name] for name in names}
 
     def reduction(self, along: str | None = None) -> tuple[Any, str | None]:
@@ -473,14 +476,15 @@ class LagrangianSystem(System):
             self.__dict__["_rates"] = cyclic_rates(self.reduced_model(), self.reduction()[0])
         return self.__dict__["_rates"]
 
-    def _closed_summaries(self, scene: "Scene", drifts: dict, names: list[str]) -> dict:
-        """The turning points and per-period advances from the closed form (:mod:`.closed`), each with the change
-        it undergoes when E moves by its evaluation's rounding from the start's doubles (as the period's
-        estimate); (None, the reason) where the motion has no closed form or the quantity does not apply."""
+    def _closed_summaries(self, scene: "Scene", drifts: dict, names: list[str], base: Any = None) -> dict:
+        """The period, turning points and per-period advances from the closed form (:mod:`.closed`; ``base``, the
+        run's own motion where it has one), each with the change it undergoes when E moves by its evaluation's
+        rounding from the start's doubles (the estimate); (None, the reason) where the motion has no closed form
+        or the quantity does not apply."""
         from .closed import closed_motion
 
         try:
-            base = closed_motion(self, dict(scene.parameters), dict(scene.initial))
+            base = base or closed_motion(self, dict(scene.parameters), dict(scene.initial))
             energy = [float(v) for k, v in base.values.items() if k.name == "E"]
             shift = 8 * 2.0**-52 * (max(float(drifts["energy"].scale), abs(float(drifts["energy"].start)))
                                     if "energy" in drifts else abs(energy[0]) if energy else 1.0)
@@ -489,7 +493,7 @@ class LagrangianSystem(System):
             return {n: (None, str(exc)) for n in names}
         out = {}
         for n in names:
-            if n == "period" and base.kind in ("steady", "unbounded") or base.kind.startswith("unbounded"):
+            if n == "period" and (base.kind == "steady" or base.kind.startswith("unbounded")):
                 out[n] = (None, f"a {base.kind} motion: no period")
                 continue
             try:
