@@ -292,7 +292,8 @@ def test_ctrl_c_stops_a_long_compiled_integration(tmp_path):
     # The solver's API, not a scene: the planner refuses scenes predicted to run too long, and this
     # test needs a compiled integration that runs for seconds.
     code = textwrap.dedent("""
-        import sys
+        import faulthandler, signal, sys
+        faulthandler.register(signal.SIGUSR1)   # the test asks for the stacks if the child hangs
         from mechderive.systems.heavy_top.integrate import integrate_heavy_top
         params = dict(I1=1.0, I3=0.5, M=0.1, g=10.0, l=1.0)
         initial = dict(theta=0.5, phi=0.0, psi=0.0, theta_dot=0.0, phi_dot=0.0, psi_dot=1e6)
@@ -305,23 +306,33 @@ def test_ctrl_c_stops_a_long_compiled_integration(tmp_path):
             sys.exit(130)
         sys.exit(0)
     """)
-    proc = subprocess.Popen([sys.executable, "-c", code], cwd=ROOT, env={**os.environ, "PYTHONPATH": str(ROOT)},
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    # stderr goes to a file, not a pipe: a child blocked writing to a full pipe nobody reads would
+    # neither see the signal's exception through nor exit (it once hung the test under load).
+    log = tmp_path / "stderr.txt"
+    with open(log, "w") as err_file:
+        proc = subprocess.Popen([sys.executable, "-c", code], cwd=ROOT,
+                                env={**os.environ, "PYTHONPATH": str(ROOT)},
+                                stdout=subprocess.PIPE, stderr=err_file, text=True)
     try:
         for line in proc.stdout:       # the short run's summary first
             if line.strip() == "ready":
                 break
-        assert proc.poll() is None, proc.stderr.read()
+        assert proc.poll() is None, log.read_text()
         time.sleep(1.0)                 # well inside the compiled integration
-        assert proc.poll() is None, proc.stderr.read()
+        assert proc.poll() is None, log.read_text()
         sent = time.perf_counter()
         proc.send_signal(signal.SIGINT)
-        proc.wait(timeout=10)
+        try:
+            proc.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            proc.send_signal(signal.SIGUSR1)
+            time.sleep(1.0)
+            pytest.fail(f"the child ran on for 10 s after Ctrl-C; its stacks:\n{log.read_text()}")
         latency = time.perf_counter() - sent
     finally:
         if proc.poll() is None:
             proc.kill()
             proc.wait()
-    err = proc.stderr.read()
+    err = log.read_text()
     assert proc.returncode == 130, err
     assert latency < 1.0, latency      # it used to run on for more than 25 s
