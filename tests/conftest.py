@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import atexit
+import functools
 import os
 import shutil
 import subprocess
@@ -42,3 +43,23 @@ def run_python(*args: str, timeout: float = 300, env: dict | None = None) -> sub
     env["PYTHONPATH"] = str(ROOT) + os.pathsep + env.get("PYTHONPATH", "")
     return subprocess.run([sys.executable, *args], cwd=ROOT, env=env, capture_output=True, text=True,
                           timeout=timeout)
+
+
+from mechderive.catalog.registry import evaluate as _EVALUATE  # noqa: E402 - the unpatched one
+
+
+@functools.cache
+def verified(claim):
+    """The catalog's verdict on ``claim``, checked once per test process (the catalog is verified once per
+    session, not once per test that reads it: test_catalog, the derivation scripts, the section files).
+
+    Only for unmodified claims: a test that plants an error calls ``evaluate`` itself."""
+    return _EVALUATE(claim)
+
+
+@pytest.fixture
+def claims_checked_once(monkeypatch):
+    """Make ``run_claims`` (the derivation scripts', the section tests') read :func:`verified`."""
+    from mechderive.catalog import registry
+
+    monkeypatch.setattr(registry, "evaluate", verified)

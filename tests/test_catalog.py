@@ -13,7 +13,7 @@ from mechderive.catalog.checks import same
 from mechderive.catalog.registry import Claim, Outcome, all_claims, evaluate, member_of, perturb
 from mechderive.cli import main
 
-from .conftest import run_python
+from .conftest import run_python, verified
 
 CLAIMS = all_claims()
 
@@ -27,7 +27,7 @@ def test_catalog_covers_the_foundation_equations():
 
 @pytest.mark.parametrize("claim", CLAIMS, ids=[f"{c.equation}" for c in CLAIMS])
 def test_claim_verified_or_documented_misprint(claim):
-    result = evaluate(claim)
+    result = verified(claim)
     assert result.status in ("verified", "misprint", "constructed"), result.detail
     if claim.constructed is not None:
         assert result.status == "constructed" and result.note == claim.constructed, result.detail

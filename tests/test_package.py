@@ -36,7 +36,8 @@ def _run_script(script: Path, monkeypatch, capsys, *args: str) -> str:
 
     In-process rather than a subprocess so that the derivations the rest of the session has
     already made (SymPy models are cached per process) are shared: the scripts cost seconds, not
-    a minute.  Each script is still run whole, from its first line, as ``__main__``.
+    a minute; with ``claims_checked_once`` the catalog's verdicts are too (test_catalog checks each claim).
+    Each script is still run whole, from its first line, as ``__main__``.
     """
     monkeypatch.setattr(sys, "argv", [str(script), *args])
     runpy.run_path(str(script), run_name="__main__")
@@ -44,14 +45,14 @@ def _run_script(script: Path, monkeypatch, capsys, *args: str) -> str:
 
 
 @pytest.mark.parametrize("script", SCRIPTS, ids=[p.name for p in SCRIPTS])
-def test_derivation_script_runs(script: Path, monkeypatch, capsys):
+def test_derivation_script_runs(script: Path, monkeypatch, capsys, claims_checked_once):
     out = _run_script(script, monkeypatch, capsys)
     assert out.strip(), "the script printed nothing"
     assert "failed" not in out.replace("0 failed", "")
 
 
 @pytest.mark.parametrize("script", SCRIPTS[:1], ids=[p.name for p in SCRIPTS[:1]])
-def test_derivation_script_latex(script: Path, monkeypatch, capsys):
+def test_derivation_script_latex(script: Path, monkeypatch, capsys, claims_checked_once):
     assert "\\begin{equation}" in _run_script(script, monkeypatch, capsys, "--latex")
 
 

@@ -23,6 +23,8 @@ from mechderive.kinematics.path_ordered import (
 )
 from mechderive.kinematics.so3 import expm_so3, hat
 
+from .conftest import verified
+
 # ----------------------------------------------------------------------------- test trajectories
 
 T_END = 2.0
@@ -300,7 +302,7 @@ def test_catalog_covers_3_11_to_3_16():
 
 @pytest.mark.parametrize("claim", CLAIMS, ids=[c.equation for c in CLAIMS])
 def test_claim_status(claim):
-    result = evaluate(claim)
+    result = verified(claim)
     expected = "misprint" if claim.equation == "3.16" else "verified"
     assert result.status == expected, result.detail
 

@@ -8,6 +8,9 @@ moments of inertia" — the same values appear in both).
 
 from __future__ import annotations
 
+import runpy
+import sys
+
 import mpmath
 import numpy as np
 import pytest
@@ -44,7 +47,7 @@ from mechderive.inertia.regions import x as x_sym
 from mechderive.inertia.regions import z as z_sym
 from mechderive.kinematics.euler import angular_velocity_body, rotation_matrix
 
-from .conftest import run_python
+from .conftest import ROOT
 
 # Rounding: a handful of products and sums of O(1) doubles -> errors ~1e-15; 1e-12 leaves room, yet any
 # formula error (a wrong coefficient is >= 1e-3 relative) fails.
@@ -506,7 +509,7 @@ MY_CLAIMS = [c for c in all_claims("3.2") + all_claims("3.3")
 
 
 class TestCatalog:
-    def test_every_claim_is_verified(self):
+    def test_every_claim_is_verified(self, claims_checked_once):
         results = run_claims(claims=MY_CLAIMS)
         assert {r.equation for r in results} >= {"3.17", "3.18", "3.19", "3.20", "3.21", "3.22", "3.23", "3.24",
                                                    "3.25", "3.26", "3.27", "3.28", "3.30"}
@@ -523,7 +526,9 @@ class TestCatalog:
             assert not claim.check(wrong if isinstance(printed, tuple) else wrong[0]).passed, k
 
 
-def test_derivation_script_runs_with_latex():
-    proc = run_python("derivations/s3_2_inertia.py", "--latex")
-    assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
-    assert "\\begin{equation}" in proc.stdout and "(3.30) verified" in proc.stdout
+def test_derivation_script_runs_with_latex(monkeypatch, capsys, claims_checked_once):
+    # in-process, as tests/test_package.py runs every script (sharing this session's derivations)
+    monkeypatch.setattr(sys, "argv", ["derivations/s3_2_inertia.py", "--latex"])
+    runpy.run_path(str(ROOT / "derivations" / "s3_2_inertia.py"), run_name="__main__")
+    out = capsys.readouterr().out
+    assert "\\begin{equation}" in out and "(3.30) verified" in out

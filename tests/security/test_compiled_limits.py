@@ -19,6 +19,7 @@ import sys
 import textwrap
 import time
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -274,11 +275,11 @@ def test_falling_cat_with_a_huge_mass_is_solved_fast(tmp_path, capsys):
     for m in ("1.0", "1e300"):
         scene, out = tmp_path / f"cat{m}.toml", tmp_path / f"cat{m}.csv"
         scene.write_text(text.format(m=m))
-        start = time.perf_counter()
+        start = time.process_time()   # CPU time: the wall clock of a loaded CI machine says little
         with warnings.catch_warnings():
             warnings.simplefilter("error")
             status = main(["run", str(scene), "-o", str(out)])
-        assert time.perf_counter() - start < 3.0      # it used to run for ever
+        assert time.process_time() - start < 3.0      # it used to run for ever
         assert status == 0, capsys.readouterr().err
         flips.append(np.loadtxt(out, delimiter=",", skiprows=1)[:, 1])
     # both runs meet rtol 1e-6-ish estimates of ~1e-9 rad: agreement to 1e-7 rad is a loose, safe bound
@@ -287,7 +288,7 @@ def test_falling_cat_with_a_huge_mass_is_solved_fast(tmp_path, capsys):
 
 
 @needs_c
-@pytest.mark.skipif(sys.platform == "win32", reason="SIGINT to a child process is POSIX")
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="SIGINT to a child, its CPU time from /proc")
 def test_ctrl_c_stops_a_long_compiled_integration(tmp_path):
     # The solver's API, not a scene: the planner refuses scenes predicted to run too long, and this
     # test needs a compiled integration that runs for seconds.
@@ -307,12 +308,13 @@ def test_ctrl_c_stops_a_long_compiled_integration(tmp_path):
         sys.exit(0)
     """)
     # stderr goes to a file, not a pipe: a child blocked writing to a full pipe nobody reads would
-    # neither see the signal's exception through nor exit (it once hung the test under load).
+    # neither see the signal's exception through nor exit.
     log = tmp_path / "stderr.txt"
     with open(log, "w") as err_file:
         proc = subprocess.Popen([sys.executable, "-c", code], cwd=ROOT,
                                 env={**os.environ, "PYTHONPATH": str(ROOT)},
                                 stdout=subprocess.PIPE, stderr=err_file, text=True)
+    status = usage = None
     try:
         for line in proc.stdout:       # the short run's summary first
             if line.strip() == "ready":
@@ -320,19 +322,34 @@ def test_ctrl_c_stops_a_long_compiled_integration(tmp_path):
         assert proc.poll() is None, log.read_text()
         time.sleep(1.0)                 # well inside the compiled integration
         assert proc.poll() is None, log.read_text()
-        sent = time.perf_counter()
+        # The latency is the child's CPU time from the signal to its exit, not the wall time: on a loaded
+        # 2-core CI machine the child may wait seconds for a core (a wall-clock bound of 10 s once failed
+        # with the child inside one short compiled chunk).
+        before = _cpu_seconds(proc.pid)
         proc.send_signal(signal.SIGINT)
-        try:
-            proc.wait(timeout=10)
-        except subprocess.TimeoutExpired:
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline:
+            pid, status, usage = os.wait4(proc.pid, os.WNOHANG)
+            if pid == proc.pid:
+                break
+            time.sleep(0.02)
+        else:
             proc.send_signal(signal.SIGUSR1)
             time.sleep(1.0)
-            pytest.fail(f"the child ran on for 10 s after Ctrl-C; its stacks:\n{log.read_text()}")
-        latency = time.perf_counter() - sent
+            pytest.fail(f"the child ran on for 120 s after Ctrl-C; its stacks:\n{log.read_text()}")
+        proc.returncode = os.waitstatus_to_exitcode(status)
+        latency = usage.ru_utime + usage.ru_stime - before
     finally:
-        if proc.poll() is None:
+        if proc.returncode is None and proc.poll() is None:
             proc.kill()
             proc.wait()
     err = log.read_text()
     assert proc.returncode == 130, err
     assert latency < 1.0, latency      # it used to run on for more than 25 s
+
+
+def _cpu_seconds(pid: int) -> float:
+    """User + system CPU time (s) of process ``pid`` and of the children it has waited for, from /proc
+    (Linux): what ``wait4`` reports at its exit."""
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return sum(int(f) for f in fields[11:15]) / os.sysconf("SC_CLK_TCK")
