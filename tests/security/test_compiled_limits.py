@@ -295,6 +295,9 @@ def test_ctrl_c_stops_a_long_compiled_integration(tmp_path):
     code = textwrap.dedent("""
         import faulthandler, signal, sys
         faulthandler.register(signal.SIGUSR1)   # the test asks for the stacks if the child hangs
+        # Ctrl-C as at a terminal: a child inherits an ignored SIGINT (the test worker's, after some
+        # tests), and Python then keeps ignoring it; the run went on to max_steps (a flaky failure)
+        signal.signal(signal.SIGINT, signal.default_int_handler)
         from mechderive.systems.heavy_top.integrate import integrate_heavy_top
         params = dict(I1=1.0, I3=0.5, M=0.1, g=10.0, l=1.0)
         initial = dict(theta=0.5, phi=0.0, psi=0.0, theta_dot=0.0, phi_dot=0.0, psi_dot=1e6)
