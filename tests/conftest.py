@@ -63,3 +63,11 @@ def claims_checked_once(monkeypatch):
     from mechderive.catalog import registry
 
     monkeypatch.setattr(registry, "evaluate", verified)
+
+
+def pytest_collection_modifyitems(config, items):
+    # Every test that reads the catalog's verdicts runs in one worker (``--dist loadgroup``), after
+    # test_catalog has checked each claim there: the derivation scripts then replay, not re-verify.
+    for item in items:
+        if "claims_checked_once" in getattr(item, "fixturenames", ()):
+            item.add_marker(pytest.mark.xdist_group("catalog"))

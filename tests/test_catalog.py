@@ -26,7 +26,7 @@ def test_catalog_covers_the_foundation_equations():
 
 
 @pytest.mark.parametrize("claim", CLAIMS, ids=[f"{c.equation}" for c in CLAIMS])
-def test_claim_verified_or_documented_misprint(claim):
+def test_claim_verified_or_documented_misprint(claim, claims_checked_once):
     result = verified(claim)
     assert result.status in ("verified", "misprint", "constructed"), result.detail
     if claim.constructed is not None:

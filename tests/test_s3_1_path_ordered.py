@@ -301,7 +301,7 @@ def test_catalog_covers_3_11_to_3_16():
 
 
 @pytest.mark.parametrize("claim", CLAIMS, ids=[c.equation for c in CLAIMS])
-def test_claim_status(claim):
+def test_claim_status(claim, claims_checked_once):
     result = verified(claim)
     expected = "misprint" if claim.equation == "3.16" else "verified"
     assert result.status == expected, result.detail
