@@ -90,3 +90,31 @@ def test_measure_period_refuses_quasi_periodic_and_short_runs():
     assert found.period is None and "fewer than one whole period" in found.reason
     periodic = measure_period(t, np.stack([np.cos(t) + 0.3 * np.cos(2 * t), -np.sin(t)], axis=1))
     assert abs(periodic.period - 2 * math.pi) <= periodic.estimate < 1e-9
+
+
+def test_batched_crossings_and_states_equal_the_one_by_one_polynomials(rng):
+    # the batched path (one Vandermonde solve, Newton from the linear crossing; Lagrange weights for all
+    # times at once) against the per-crossing reference: NumPy's polyfit + every root of the polynomial,
+    # and the Lagrange form written out term by term.  Both interpolate the same samples, so they agree to
+    # rounding: 1e-12 of the interval (the quintic's coefficients are solved from six samples).
+    from mechderive.core.periodic import _crossing, _crossings, _states_at
+
+    t = np.sort(rng.uniform(0.0, 30.0, 1500))
+    x = np.cos(1.7 * t + 0.3) + 0.4 * np.cos(3.1 * t) + 0.05 * np.sin(11.0 * t)
+    level = 0.1
+    up = np.nonzero((x[:-1] < level) & (x[1:] >= level))[0]
+    up = up[(up >= 2) & (up <= len(t) - 4)]
+    assert len(up) >= 5
+    for points in (4, 6):
+        want = np.array([_crossing(t, x, int(k), level, points) for k in up])
+        got = _crossings(t, x, up, level, points)
+        np.testing.assert_allclose(got, want, rtol=0, atol=1e-12 * np.max(np.diff(t)[up]))
+        y = np.stack([x, np.sin(t)], axis=1)
+        when = got
+        states = _states_at(t, y, when, points)
+        for w, s in zip(when, states):
+            k = int(np.clip(np.searchsorted(t, w) - 1, 0, len(t) - 2))
+            lo = min(max(k - (points - 2) // 2, 0), len(t) - points)
+            ts = t[lo:lo + points]
+            weights = [np.prod([(w - ts[j]) / (ts[i] - ts[j]) for j in range(points) if j != i]) for i in range(points)]
+            np.testing.assert_allclose(s, np.array(weights) @ y[lo:lo + points], rtol=0, atol=1e-12)

@@ -51,14 +51,52 @@ def _crossing(t: np.ndarray, x: np.ndarray, k: int, level: float, points: int) -
     return float(t[k] + min(real, key=lambda r: abs(r - b / 2)) * scale)
 
 
-def _at(t: np.ndarray, y: np.ndarray, when: float, points: int) -> np.ndarray:
-    """The state at ``when``, by the polynomial through the ``points`` samples around it (Lagrange's form)."""
-    k = int(np.clip(np.searchsorted(t, when) - 1, 0, len(t) - 2))
-    lo = min(max(k - (points - 2) // 2, 0), len(t) - points)
-    ts = t[lo:lo + points]
-    weights = np.array([np.prod([(when - ts[j]) / (ts[i] - ts[j]) for j in range(points) if j != i])
-                        for i in range(points)])
-    return weights @ y[lo:lo + points]
+def _windows(n: int, ks: np.ndarray, points: int) -> np.ndarray:
+    """Indices (m, points) of the ``points`` samples around each interval [k, k + 1], inside 0 … n − 1."""
+    lo = np.clip(ks - (points - 2) // 2, 0, n - points)
+    return lo[:, None] + np.arange(points)
+
+
+def _crossings(t: np.ndarray, x: np.ndarray, ks: np.ndarray, level: float, points: int) -> np.ndarray:
+    """:func:`_crossing` at every interval of ``ks`` at once: the interpolating polynomials are solved for in
+    one batched Vandermonde system and their roots found by Newton's method from the linear crossing;
+    an interval where Newton does not land inside it falls back to :func:`_crossing` (all the roots)."""
+    idx = _windows(len(t), ks, points)
+    ts, xs = t[idx], x[idx] - level
+    scale = ts[:, -1] - ts[:, 0]
+    s = (ts - t[ks][:, None]) / scale[:, None]
+    powers = np.arange(points)
+    coeffs = np.linalg.solve(s[:, :, None] ** powers, xs[:, :, None])[:, :, 0]  # (m, points), lowest first
+    b = (t[ks + 1] - t[ks]) / scale
+    root = b * (level - x[ks]) / (x[ks + 1] - x[ks])
+    for _ in range(8):
+        value = np.zeros_like(root)
+        slope = np.zeros_like(root)
+        for c in coeffs.T[::-1]:  # Horner, for the value and its derivative
+            slope = slope * root + value
+            value = value * root + c
+        with np.errstate(divide="ignore", invalid="ignore"):
+            root = root - value / slope
+    out = t[ks] + root * scale
+    bad = ~(np.isfinite(root) & (root >= -1e-9) & (root <= b + 1e-9))
+    for i in np.nonzero(bad)[0]:
+        out[i] = _crossing(t, x, int(ks[i]), level, points)
+    return out
+
+
+def _states_at(t: np.ndarray, y: np.ndarray, when: np.ndarray, points: int) -> np.ndarray:
+    """The state (m, k) at each of the times ``when``, by the polynomial through the ``points`` samples
+    around it (Lagrange's form, all times at once)."""
+    ks = np.clip(np.searchsorted(t, when) - 1, 0, len(t) - 2)
+    idx = _windows(len(t), ks, points)
+    ts = t[idx]                                               # (m, p)
+    numer = np.repeat((when[:, None] - ts)[:, None, :], points, axis=1)  # (m, i, j): when − t_j
+    denom = ts[:, :, None] - ts[:, None, :]                   # t_i − t_j
+    eye = np.eye(points, dtype=bool)
+    numer[:, eye] = 1.0
+    denom[:, eye] = 1.0
+    weights = np.prod(numer / denom, axis=2)                  # (m, p)
+    return np.einsum("mp,mpk->mk", weights, y[idx])
 
 
 def measure_period(t: np.ndarray, state: np.ndarray, *, component_errors: np.ndarray | None = None) -> Period:
@@ -84,15 +122,15 @@ def measure_period(t: np.ndarray, state: np.ndarray, *, component_errors: np.nda
     up = up[(up >= 2) & (up <= len(t) - 4)]  # room for six samples around each crossing
     if len(up) < 2:
         return Period(None, None, "fewer than one whole period inside the run, away from its ends: run longer")
-    cubic = np.array([_crossing(t, x, k, level, 6) for k in up])  # the quintic through six samples
-    quadratic = np.array([_crossing(t, x, k, level, 4) for k in up])  # the cubic, to measure the first's error
+    cubic = _crossings(t, x, up, level, 6)  # the quintic through six samples
+    quadratic = _crossings(t, x, up, level, 4)  # the cubic, to measure the first's error
     interpolation = float(np.max(np.abs(cubic - quadratic)))
     intervals = np.diff(cubic)
     period = float((cubic[-1] - cubic[0]) / (len(cubic) - 1))
     spread = float(np.max(np.abs(intervals - period)))
     # the whole state must come back at each crossing: else the motion is not periodic
-    states = np.array([_at(t, y, when, 6) for when in cubic])
-    state_error = np.max(np.abs(states - np.array([_at(t, y, when, 4) for when in cubic])), axis=0)
+    states = _states_at(t, y, cubic, 6)
+    state_error = np.max(np.abs(states - _states_at(t, y, cubic, 4)), axis=0)
     h = float(np.max(np.diff(t)))
     slope = np.max(np.abs(np.diff(y, axis=0)), axis=0) / h  # a bound of each component's rate
     # the return is judged to the samples' own precision: the interpolation, a millionth of each component's
