@@ -129,11 +129,46 @@ def test_configurations_not_covered_are_refused_with_the_reason():
     with pytest.raises(NotElliptic, match="through infinity"):
         elliptic_motion(np.real(np.poly((-1.0, 2.0, complex(1, 2), complex(1, -2)))), 3.0, 1)
     with pytest.raises(NotElliptic, match="double root"):
-        elliptic_motion(-np.poly((0.0, 1.0, 1.0)), 0.5, 0)
+        elliptic_motion(np.poly((0.0, 1.0, 1.0)), 1.0, 0)  # on the double root, P'' > 0: unstable equilibrium
+    with pytest.raises(NotElliptic, match="P\\(u0\\) ≥ 0"):
+        elliptic_motion(-np.poly((0.0, 1.0, 1.0)), 0.5, 1)  # P < 0 there
     with pytest.raises(NotElliptic, match="degree 2, 3 or 4"):
         elliptic_motion([1.0, 2.0], 0.0, 1)
-    with pytest.raises(NotElliptic, match="bounded quadratic"):
-        elliptic_motion([1.0, 0.0, -1.0], 2.0, 1)
+    with pytest.raises(NotElliptic, match="complex roots"):
+        elliptic_motion([1.0, 0.0, 1.0], 2.0, 1)  # u̇² = u² + 1: no real root, u passes through every value
+    motion = elliptic_motion(np.poly((0.0, 1.0, 1.0)), 0.0, 0)  # a separatrix: its rates are refused
+    with pytest.raises(NotElliptic, match="m = 1"):
+        rate_integral(motion, [1.0], [1.0, 2.0])
+
+
+# m = 1: from a turning point towards a double root of P (a separatrix), or to ∞ where the quadratic's P has its
+# double branch point (hyperbolic escape, u = r + (r − r') sinh²(κt + v_s)); never returning
+ASYMPTOTIC = [
+    ("quadratic, lead > 0, u ≥ r2, outwards", (-1.0, 1.0), 4.0, 1.5, 1),
+    ("quadratic, lead > 0, u ≥ r2, inwards first", (-1.0, 1.0), 4.0, 1.5, -1),
+    ("quadratic, lead > 0, u ≤ r1", (-1.0, 1.0), 4.0, -2.0, 1),
+    ("quadratic, lead > 0, from its root", (-1.0, 1.0), 4.0, 1.0, 0),
+    ("cubic separatrix, towards the double root", (-1.0, -1.0, 1.0), -1.0, 0.3, -1),
+    ("cubic separatrix, from the turning point", (-1.0, -1.0, 1.0), -1.0, 1.0, 0),
+    ("cubic separatrix, double root above", (-1.0, 1.0, 1.0), 1.0, 0.0, 1),
+    ("quartic separatrix", (-2.0, 0.5, 0.5, 2.0), -1.0, 1.0, -1),
+]
+
+
+@pytest.mark.parametrize("name, roots, lead, u0, direction", ASYMPTOTIC, ids=[c[0] for c in ASYMPTOTIC])
+def test_u_of_t_at_m_1_solves_the_quadrature(name, roots, lead, u0, direction):
+    coeffs = lead * np.real(np.poly(roots))
+    motion = elliptic_motion(coeffs, u0, direction)
+    assert motion.m == 1 and motion.asymptotic and not np.isfinite(float(motion.u_period))
+    t = np.linspace(0.0, 2.5, 251)  # the hyperbolic ones grow as e^{2κt}: ~10⁴ at the end
+    ref, _ = _ode_reference(coeffs, u0, direction, t)
+    # DOP853 at rtol 1e-13 is the reference; its own error grows with the exponential divergence near the
+    # separatrix, measured at ≲ 1e-12 over this span
+    assert np.max(np.abs(motion.u(t) - ref) / (1 + np.abs(ref))) <= 1e-10
+    # the far end is approached, not reached: the limit of u(t) is b
+    far = motion.u(np.array([60.0 / float(motion.kappa)]))[0]
+    b = float(motion.interval[1])
+    assert (np.isinf(b) and np.isinf(far)) or abs(far - b) <= 1e-12 * (1 + abs(b))
 
 
 # --- systems from their Lagrangians: closed form against integration -----------------------------------------
@@ -168,6 +203,13 @@ SYSTEMS = [
      dict(theta=0.8, phi=0.0, theta_dot=0.0, phi_dot=float(np.sqrt(9.81 / np.cos(0.8)))),
      "oscillation between turning points"),
     ("pendulum at rest", ["theta"], PENDULUM, G, dict(theta=0.0, theta_dot=0.0), "steady"),
+    # m = 1: exactly on a separatrix (numbers exact in binary: E is the top's potential energy to the last bit),
+    # and the bead on a rod turning at w (Taylor's problem: r̈ = w² r, an unbounded quadratic)
+    ("pendulum on the separatrix", ["theta"], PENDULUM, dict(m=1.0, l=1.0, g=4.0), dict(theta=0.0, theta_dot=4.0),
+     "libration through a fold, on the separatrix (m = 1)"),
+    ("double well, homoclinic", ["x"], "x_dot**2/2 + x**2/2 - x**4/2", {}, dict(x=1.0, x_dot=0.0),
+     "separatrix: towards an unstable equilibrium"),
+    ("bead on a rotating rod", ["r"], "r_dot**2/2 + w**2*r**2/2", dict(w=2.0), dict(r=1.0, r_dot=-1.5), "unbounded"),
 ]
 
 
@@ -560,3 +602,23 @@ def _attitude(angles: dict) -> np.ndarray:
         return np.stack([np.stack([o, z, z], -1), np.stack([z, c, s], -1), np.stack([z, -s, c], -1)], -2)
 
     return r3(angles["psi"]) @ r1(angles["theta"]) @ r3(angles["phi"])
+
+
+def test_separatrix_summaries_are_the_limits_approached():
+    """On a separatrix q tends to the unstable equilibrium and never returns: the turning values are the
+    turning point and that limit (by hand: the pendulum's ±π, the homoclinic orbit's 0 and 1), and no period."""
+    pendulum = run_scene(_scene(["theta"], PENDULUM, dict(m=1.0, l=1.0, g=4.0), dict(theta=0.0, theta_dot=4.0),
+                                summary=["theta_min", "theta_max", "period"]))
+    s, e = pendulum.report["summary"], pendulum.report["summary_error"]
+    assert abs(s["theta_min"] + np.pi) <= 4e-16 * np.pi and abs(s["theta_max"] - np.pi) <= 4e-16 * np.pi
+    assert s["period"] is None and "infinitely long" in e["period"]
+    # θ(t) = 2 gd(2t) = π − 4 atan(e^{−2t}) (ω0 = 2): the separatrix's own formula, by hand, in the form that
+    # keeps π − θ's digits (2 asin(tanh 2t) rounds to π from t ≈ 9); θ̇ = 4 sech(2t)
+    t = np.linspace(0.0, 12.0, 601)
+    assert np.max(np.abs(pendulum.columns["theta"] - (np.pi - 4 * np.arctan(np.exp(-2 * t))))) <= 1e-13
+    assert np.max(np.abs(pendulum.columns["theta_dot"] - 4 / np.cosh(2 * t))) <= 1e-13
+    well = run_scene(_scene(["x"], "x_dot**2/2 + x**2/2 - x**4/2", {}, dict(x=1.0, x_dot=0.0),
+                            summary=["x_min", "x_max"]))
+    assert well.report["summary"] == {"x_min": 0.0, "x_max": 1.0}
+    # x(t) = sech(t): the homoclinic orbit of ẍ = x − 2x³, by hand
+    assert np.max(np.abs(well.columns["x"] - 1 / np.cosh(t))) <= 1e-14

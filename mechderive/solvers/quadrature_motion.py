@@ -30,10 +30,17 @@ R(u_s)·t (the degenerate M(w) = u_s).
 A quartic with two real roots and a complex pair oscillates between the real ones in cn
 (:class:`EllipticMotionCn`, Byrd & Friedman 259.00); its cyclic rates are not covered.
 
+m = 1 (``EllipticMotion.asymptotic``): from its turning point a the motion goes towards b in infinite time
+and never returns, with sn = tanh and cn = dn = sech — a separatrix, where b is a double root of P (the
+pendulum launched with exactly the speed to reach the top, θ = 2 gd(ω0 t); a homoclinic orbit,
+x = sech t), or the unbounded quadratic P = c0 (u − r1)(u − r2), c0 > 0, whose double branch point is ∞
+(u = r + (r − r') sinh²(κt + v_s), κ² = c0/4: the bead on a turning rod, r̈ = ω² r).  No period; the phase
+is not reduced (K = ∞).
+
 Not covered (the caller integrates instead; :class:`NotElliptic` says why): a quartic with only complex
-roots or escaping through infinity, a cubic with one real root, an unbounded quadratic, degree ≤ 1, a separatrix (a double root at
-an end of the motion, m = 1) or an unstable equilibrium, and rates with complex poles, poles on the
-motion, or a polynomial part of degree > 1 in w.
+roots or escaping through infinity, a cubic with one real root, a quadratic with no real root (no turning
+point), degree ≤ 1, an unstable equilibrium (a start on a double root with P'' > 0), the cyclic rates at
+m = 1, and rates with complex poles, poles on the motion, or a polynomial part of degree > 1 in w.
 """
 
 from __future__ import annotations
@@ -96,6 +103,19 @@ class EllipticMotion:
     steady: bool = False
     _f: dict = field(default_factory=dict, repr=False)
 
+    @property
+    def asymptotic(self) -> bool:
+        """m = 1: the motion goes from its turning point a towards b in infinite time and never returns (b a
+        double root of P: a separatrix; or b = ∞, a double point of the quadratic's P: hyperbolic escape);
+        sn = tanh, cn = dn = sech, K = ∞ and no period."""
+        return not self.steady and self.m == 1
+
+    def _den(self, w: np.ndarray, cn: np.ndarray) -> np.ndarray:
+        """C + D w; at m = 1 as C cn² + (C + D) w (1 − w = cn²), which keeps its digits as w → 1 (M(1) = ∞
+        for the hyperbolic quadratic: C + D = 0)."""
+        A, B, C, D, det = self._mob()
+        return C * (cn * cn) + (C + D) * w if self.asymptotic else C + D * w
+
     # --- the phase ---------------------------------------------------------------------------
 
     def phase(self, t: Any) -> tuple[np.ndarray, np.ndarray]:
@@ -106,6 +126,9 @@ class EllipticMotion:
         t = np.asarray(t, dtype=float)
         k_hi, k_lo = self._doubles("kappa")
         s_hi, s_lo = self._doubles("v_start")
+        if self.asymptotic:  # m = 1: K = ∞, nothing to reduce; v in double-double all the same
+            p, pe = two_prod(np.broadcast_to(k_hi, t.shape).astype(float), t)
+            return np.zeros(t.shape), p + (pe + k_lo * t + s_hi + s_lo)
         f_hi, f_lo = self._doubles("four_K")
         v = k_hi * t + s_hi
         n = np.floor(v / f_hi + 0.5)
@@ -145,7 +168,7 @@ class EllipticMotion:
         sn, cn, dn, _, _ = self.jacobi(t) if jac is None else jac
         A, B, C, D, det = self._mob()
         w = sn * sn
-        den = C + D * w
+        den = self._den(w, cn)
         a, b = self.interval
         near_a = w <= 0.5
         with np.errstate(all="ignore"):
@@ -163,7 +186,7 @@ class EllipticMotion:
         sn, cn, dn, _, _ = self.jacobi(t) if jac is None else jac
         A, B, C, D, det = self._mob()
         w = sn * sn
-        den = C + D * w
+        den = self._den(w, cn)
         a, b = self.interval
         mp = _mp()
         with mp.workdps(DPS):
@@ -183,7 +206,7 @@ class EllipticMotion:
         sn, cn, dn, _, _ = self.jacobi(t) if jac is None else jac
         A, B, C, D, det = self._mob()
         w = sn * sn
-        den = C + D * w
+        den = self._den(w, cn)
         kap = float(self.kappa)
         scale = abs(det / C) if end == "a" else abs(det / (C + D))
         rho = np.sqrt(scale / np.abs(den))
@@ -198,7 +221,7 @@ class EllipticMotion:
         sn, cn, dn, _, _ = self.jacobi(t) if jac is None else jac
         A, B, C, D, det = self._mob()
         w = sn * sn
-        return det / (C + D * w) ** 2 * 2.0 * float(self.kappa) * sn * cn * dn
+        return det / self._den(w, cn) ** 2 * 2.0 * float(self.kappa) * sn * cn * dn
 
     def amplitude(self, t: Any) -> np.ndarray:
         """am(v(t)|m), continuous in t (a rotation's angle is affine in it)."""
@@ -383,16 +406,20 @@ def _elliptic_motion(coefficients: Sequence, u0: Any, direction: int, dps: int) 
             x, y = close[0]
             double = (x + y) / 2
             curvature = mp.polyval([ci * (degree - i) * (degree - i - 1) for i, ci in enumerate(c[:-2])], double)
-            if abs(u0 - double) <= mp.mpf(2) ** -40 * (1 + abs(u0)) and curvature < 0:
-                return _steady(c, degree, double, curvature)
-            raise NotElliptic("expected simple roots of P, got a double root at u = "
-                              f"{mp.nstr(double, 10)} that the motion "
-                              + ("starts on: an unstable equilibrium (the separatrix's end), not periodic"
-                                 if abs(u0 - double) <= mp.mpf(2) ** -40 * (1 + abs(u0)) else
-                                 "approaches: a separatrix (m = 1), not periodic"))
+            if abs(u0 - double) <= mp.mpf(2) ** -40 * (1 + abs(u0)):
+                if curvature < 0:
+                    return _steady(c, degree, double, curvature)
+                raise NotElliptic("expected simple roots of P, got a double root at u = "
+                                  f"{mp.nstr(double, 10)} that the motion starts on: an unstable equilibrium "
+                                  "(the separatrix's end), not periodic")
+            if len(close) > 1 or degree == 2:
+                raise NotElliptic("expected at most one double root of P, away from the start, got "
+                                  f"{len(close)} (a degenerate P)")
+            # a separatrix: the motion runs from its turning point towards the double root in infinite time;
+            # the double root is two coincident branch points, so m = 1 below (sn = tanh)
+            roots = [double if r in (x, y) else r for r in roots]
         if degree == 2 and c[0] > 0:
-            raise NotElliptic("expected a bounded quadratic (negative leading coefficient), got an unbounded one: "
-                              "hyperbolic motion, not periodic")
+            return _hyperbolic(c, roots, u0, direction)
         # the branch points in the cyclic order of the projective line; ∞ is one when the degree is odd
         points = list(roots) + ([mp.inf] if degree % 2 else [])
         slack = mp.mpf(2) ** -40 * (1 + abs(u0))
@@ -428,17 +455,22 @@ def _elliptic_motion(coefficients: Sequence, u0: Any, direction: int, dps: int) 
             # (lo, hi, X, Y) in the circle's order, or reversed (hi, lo, Y, X): both give the same m; take the
             # one with d = ∞ when ∞ is a branch point, so that M is affine (u = a + (b − a) w, the chapter's form)
             a, b, cc, d = (points[(found + k) % count] for k in range(4))
-            if mp.isinf(cc):
+            # the reversed listing too when the double root of a separatrix is at the start (d = a): it must be
+            # b = c, the end approached (m = 1), not d = a (a degenerate M)
+            if mp.isinf(cc) or (not mp.isinf(a) and not mp.isinf(d) and a == d):
                 a, b, cc, d = b, a, d, cc
         if degree == 4 and (mp.isinf(a) or mp.isinf(b)):
             raise NotElliptic("expected a finite interval of motion")
-        if degree == 4 and b < a:
+        lo, hi = points[found], points[(found + 1) % count]
+        if degree == 4 and not mp.isinf(hi) and hi < lo:
             raise NotElliptic("expected motion between two finite roots, got u passing through ∞ (a quartic whose "
                               "motion goes through the point at infinity of u): not covered")
         mob = _mobius(a, b, d)
         winv = _inverse(mob, cc)
         m = mp.mpf(0) if mp.isinf(winv) else 1 / winv
-        if not 0 <= m < 1:
+        if abs(m - 1) <= mp.mpf(10) ** (-DPS + 5):
+            m = mp.mpf(1)  # a double root at the far end: a separatrix
+        if not 0 <= m <= 1:
             raise NotElliptic(f"expected a parameter 0 ≤ m < 1 from the cross-ratio of the roots, got {mp.nstr(m, 8)}")
         A, B, C, D = mob
         det = B * C - A * D
@@ -477,9 +509,38 @@ def _elliptic_motion(coefficients: Sequence, u0: Any, direction: int, dps: int) 
         v_start = -v0 if w_direction < 0 else v0
         if direction == 0:
             # u̇(0) = 0: u starts at a turning point (q̇ = 0, or q on a fold of g), whatever rounding put u0
-            # a hair inside the interval (√ of it would shift the phase by ~1e-8)
-            v_start = mp.mpf(0) if w0 <= mp.mpf(1) / 2 else K
+            # a hair inside the interval (√ of it would shift the phase by ~1e-8); at m = 1 only a is one
+            v_start = mp.mpf(0) if w0 <= mp.mpf(1) / 2 or m == 1 else K
         return EllipticMotion(tuple(c), (a, b), (a, b, cc, d), mob, m, m1, kappa, v_start, K, 2 * K / kappa, degree)
+
+
+def _hyperbolic(c: list, roots: list, u0: Any, direction: int) -> EllipticMotion:
+    """P = c0 (u − r1)(u − r2) with c0 > 0: u runs from its turning point (r2 for u ≥ r2, r1 for u ≤ r1) to ∞,
+    u = M(tanh²(κ t + v_s)) = r + (r − r') sinh²(κ t + v_s) with κ² = c0/4: the m = 1 case of the Möbius form,
+    ∞ being the quadratic's double branch point (b = c = ∞, d = the other root)."""
+    mp = _mp()
+    if len(roots) < 2:
+        raise NotElliptic("expected real roots of an unbounded quadratic P, got none: u passes through every "
+                          "value (a motion with no turning point), not covered")
+    r1, r2 = roots[0], roots[-1]
+    slack = mp.mpf(2) ** -40 * (1 + abs(u0))
+    if u0 >= r2 - slack:
+        a, d = r2, r1
+    elif u0 <= r1 + slack:
+        a, d = r1, r2
+    else:
+        raise NotElliptic(f"expected u̇² = P(u0) ≥ 0, got P(u0) < 0 at u0 = {mp.nstr(u0, 10)} between the roots")
+    mob = _mobius(a, mp.inf, d)
+    A, B, C, D = mob
+    kappa = mp.sqrt(c[0] / 4)
+    w0 = _inverse(mob, u0)
+    w0 = min(max(w0, mp.mpf(0)), mp.mpf(1))
+    v0 = mp.ellipf(mp.asin(mp.sqrt(w0)), 1)
+    det = B * C - A * D
+    w_direction = direction * (1 if det / (C + D * w0) ** 2 > 0 else -1)
+    v_start = mp.mpf(0) if direction == 0 else (-v0 if w_direction < 0 else v0)
+    return EllipticMotion(tuple(c), (a, mp.inf), (a, mp.inf, mp.inf, d), mob, mp.mpf(1), mp.mpf(0), kappa, v_start,
+                          mp.inf, mp.inf, 2)
 
 
 def _steady(c: list, degree: int, double: Any, curvature: Any) -> EllipticMotion:
@@ -619,6 +680,9 @@ def rate_integral(motion: EllipticMotion, numerator: Sequence, denominator: Sequ
     if isinstance(motion, EllipticMotionCn):
         raise NotElliptic("expected a motion in sn² for a cyclic coordinate's Π, got a quartic with complex roots "
                           "(its rates are not covered)")
+    if motion.asymptotic:
+        raise NotElliptic("expected a periodic motion for a cyclic coordinate's Π, got m = 1 (a separatrix or a "
+                          "hyperbolic escape): its rates are not covered")
     with mp.workdps(DPS):
         N = [mp.mpf(x) for x in numerator]
         Dn = [mp.mpf(x) for x in denominator]

@@ -132,6 +132,9 @@ class ClosedMotion:
         a, b = motion.interval
         ends = []
         for end, value in (("a", a), ("b", b)):
+            if end == "b" and motion.asymptotic:  # approached, never reached: not a fold q passes through
+                ends.append(None)
+                continue
             fold = None if mp.isinf(value) else self.shape.fold_point(float(value), q0)
             with mp.workdps(DPS):  # a root 1e-17 from a fold is a turning point, not the fold
                 exact_fold = fold is not None and any(abs(value - mp.mpf(u_e)) <= mp.mpf(10) ** -25
@@ -160,20 +163,31 @@ class ClosedMotion:
             self.q_fold = self.shape.fold_point(value, q0)
         elif motion.steady:
             self.kind = "steady"
+        elif motion.asymptotic and np.isfinite(float(b)):
+            self.kind = "separatrix: towards an unstable equilibrium"
         else:
             self.kind = "oscillation between turning points" if np.isfinite(float(b)) else "unbounded"
         if found.name == "u = 1/q" and float(min(a, b)) <= 0 <= float(max(a, b)):
             # u = 1/q passes 0: q escapes to ±∞ there (Kepler's hyperbola along φ); past it u has no meaning
             self.kind = "unbounded: q → ∞ where u = 1/q reaches 0"
         self.motion = motion
+        #: the value of u at the substitution's other fold (u_e ∓ 2 for the sine-type shapes), if it has one
+        self.other_fold = None
         if self.kind == "libration through a fold":
+            u_e = float(a if self.end == "a" else b)
+            others = [v for v, _, _ in self.shape.folds if abs(v - u_e) > 1e-9 * (1 + abs(v))]
+            if self.shape.local == "asin" and others:
+                self.other_fold = others[0]
             sigma, sigma_dot = motion.signed_root(self.end, np.zeros(1))
             if abs(sigma[0]) > 1e-150:
                 self.eps = float(np.sign((q0 - self.q_fold) * sigma[0]))
             else:
                 self.eps = float(np.sign(qd0 * sigma_dot[0])) or 1.0
-        # the period of q: twice u's through one fold (q returns after u's second turn), u's otherwise
+        # the period of q: twice u's through one fold (q returns after u's second turn), u's otherwise;
+        # infinite at m = 1 (a separatrix, a hyperbolic escape)
         self.period = motion.u_period * (2 if self.kind == "libration through a fold" else 1)
+        #: the motion's time scale: its period, or 1/κ where there is none
+        self.time_scale = float(self.period) if not motion.asymptotic else 1.0 / float(motion.kappa)
 
     # --- constants --------------------------------------------------------------------------------
 
@@ -272,9 +286,11 @@ class ClosedMotion:
     def describe(self) -> dict:
         """The closed form's constants for the report: substitution, degree, the motion's kind, m, κ, the period."""
         mo = self.motion
-        return {"substitution": self.found.name, "degree": self.found.degree, "motion": self.kind,
+        kind = self.kind if not mo.asymptotic or self.kind.startswith(("separatrix", "unbounded")) else \
+            f"{self.kind}, on the separatrix (m = 1)"
+        return {"substitution": self.found.name, "degree": self.found.degree, "motion": kind,
                 "interval": [float(x) for x in mo.interval], "m": float(mo.m), "kappa": float(mo.kappa),
-                "period": float(self.period)}
+                "period": float(self.period) if np.isfinite(float(self.period)) else None}
 
     def summary(self, name: str) -> float:
         """``<q>_min``, ``<q>_max`` (the turning points of q; the fold's mirror image for a libration through a
@@ -310,7 +326,17 @@ class ClosedMotion:
             sigma, sigma_dot = mo.signed_root(self.end, t, jac)
             x = sigma / np.sqrt(2.0)
             if shape.local == "asin":
-                f, df = np.arcsin(np.clip(x, -1.0, 1.0)), 1.0 / np.sqrt(np.maximum(1.0 - x * x, 0.0))
+                with np.errstate(divide="ignore"):  # x = ±1 at the other fold: replaced below
+                    f, df = np.arcsin(np.clip(x, -1.0, 1.0)), 1.0 / np.sqrt(np.maximum(1.0 - x * x, 0.0))
+                if self.other_fold is not None:
+                    # near the other fold (|u − u_o| = 2(1 − x²), |u_e − u_o| = 2) take 1 − x² from u − u_o at the
+                    # nearer end of the motion: a separatrix approaches it exponentially, where 1 − x² from x would
+                    # round to 0 (θ = π exactly, θ̇ = NaN)
+                    with np.errstate(all="ignore"):
+                        rest = np.abs(mo.minus(self.other_fold, t, jac)) / 2.0
+                        far = x * x > 0.5
+                        f = np.where(far, np.sign(x) * (np.pi / 2 - np.arcsin(np.sqrt(rest))), f)
+                        df = np.where(far, 1.0 / np.sqrt(rest), df)
             elif shape.local == "asinh":
                 f, df = np.arcsinh(x), 1.0 / np.sqrt(1.0 + x * x)
             else:
@@ -351,7 +377,7 @@ class ClosedMotion:
         truncation, h²/6 times the third derivative, is ~10⁻⁸ of the rate, far below the tolerance 10⁻⁴."""
         t = np.asarray(t, dtype=float)
         picks = t[np.unique(np.linspace(0, len(t) - 1, min(len(t), 5)).astype(int))]
-        h = 1e-4 * float(self.period)
+        h = 1e-4 * self.time_scale
         angles = [n for n in names if n in (self.remaining, *self.cyclic)]
         if not angles:
             return None
@@ -360,7 +386,7 @@ class ClosedMotion:
         for n in angles:
             diff = (plus[n] - minus[n]) / (2 * h)
             rate = here[n + "_dot"]
-            scale = np.max(np.abs(rate)) + abs(float(self.q0)) / float(self.period) + 1e-300
+            scale = np.max(np.abs(rate)) + abs(float(self.q0)) / self.time_scale + 1e-300
             bad = np.abs(diff - rate) > 1e-4 * scale
             if np.any(bad):
                 i = int(np.argmax(bad))

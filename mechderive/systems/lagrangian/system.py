@@ -496,6 +496,19 @@ class LagrangianSystem(System):
             if n == "period" and (base.kind == "steady" or base.kind.startswith("unbounded")):
                 out[n] = (None, f"a {base.kind} motion: no period")
                 continue
+            if n == "period" and base.motion.asymptotic:
+                out[n] = (None, f"m = 1 ({base.kind}): the motion takes infinitely long and does not return")
+                continue
+            if base.motion.asymptotic and not n.endswith("_per_period"):
+                # on a separatrix the far end is the double root, exact from the scene's numbers (a shift of E by
+                # its rounding would make another kind of motion, not a nearby value): the limit q approaches
+                try:
+                    value = base.summary(n)
+                except OutOfReach as exc:
+                    out[n] = (None, str(exc))
+                    continue
+                out[n] = (value, 4 * 2.0**-52 * abs(value))
+                continue
             try:
                 value, other = ((float(base.period), float(moved.period)) if n == "period"
                                 else (base.summary(n), moved.summary(n)))
