@@ -26,6 +26,7 @@ import in a function body runs too, only later); those under ``if TYPE_CHECKING:
 from __future__ import annotations
 
 import ast
+import functools
 from pathlib import Path
 
 import pytest
@@ -116,7 +117,12 @@ def _imports(path: Path) -> list[tuple[str, int, bool]]:
 
 
 MODULES = {_module_name(p): p for p in sorted(PACKAGE.rglob("*.py"))}
-IMPORTS = {name: _imports(path) for name, path in MODULES.items()}
+
+
+@functools.cache
+def _all_imports() -> dict[str, list[tuple[str, int, bool]]]:
+    # parsed on first use, not at collection: every xdist worker collects this file, one runs its tests
+    return {name: _imports(path) for name, path in MODULES.items()}
 
 
 def _allowed(importer: str, imported: str, in_function: bool) -> bool:
@@ -132,7 +138,7 @@ def test_every_module_has_a_layer():
 def test_no_import_goes_upward():
     upward = [f"{m} (line {line}{', in a function' if f else ''}) imports {target}: layer {_layer(m)} -> "
               f"{_layer(target)}"
-              for m, found in IMPORTS.items() for target, line, f in found
+              for m, found in _all_imports().items() for target, line, f in found
               if target != ROOT and _layer(target) > _layer(m) and not _allowed(m, target, f)]
     assert not upward, "upward imports:\n" + "\n".join(upward)
 
@@ -145,7 +151,7 @@ def test_the_exceptions_name_modules_that_exist():
 
 def _module_level_graph() -> dict[str, set[str]]:
     graph: dict[str, set[str]] = {m: set() for m in MODULES}
-    for m, found in IMPORTS.items():
+    for m, found in _all_imports().items():
         for target, _, in_function in found:
             if in_function:
                 continue
@@ -206,6 +212,6 @@ def test_no_import_cycle_at_module_level():
 @pytest.mark.parametrize("path", ["mechderive/solvers/dop853_c.py", "mechderive/solvers/kick_drift_c.py"])
 def test_the_solvers_generate_code_from_below(path):
     """The loop solvers -> derive.formats -> derive.catalog -> systems -> solvers is gone."""
-    found = IMPORTS[_module_name(PACKAGE.parent / path)]
+    found = _all_imports()[_module_name(PACKAGE.parent / path)]
     assert ("mechderive.core.codegen", ) in {(t,) for t, _, _ in found}
     assert not any(t.startswith("mechderive.derive") for t, _, _ in found)
