@@ -622,3 +622,15 @@ def test_separatrix_summaries_are_the_limits_approached():
     assert well.report["summary"] == {"x_min": 0.0, "x_max": 1.0}
     # x(t) = sech(t): the homoclinic orbit of ẍ = x − 2x³, by hand
     assert np.max(np.abs(well.columns["x"] - 1 / np.cosh(t))) <= 1e-14
+
+
+def test_separatrix_keeps_its_digits_where_integration_falls_off():
+    """On the separatrix π − θ ~ 4e^{−2t}: at t = 30 it is 4e-26, far below θ's rounding; the closed form's θ and θ̇
+    (from the nearer end, cn² = sech²) stay within 1e-15 of the hand formula, with an estimate that says so,
+    where DOP853 at rtol 1e-12 has fallen off the unstable equilibrium (measured: off by 2π from t ≈ 20)."""
+    run = run_scene(_scene(["theta"], PENDULUM, dict(m=1.0, l=1.0, g=4.0), dict(theta=0.0, theta_dot=4.0),
+                           t_end=30.0, samples=301))
+    t = np.linspace(0.0, 30.0, 301)
+    assert run.report["method"] == "exact" and run.report["error_estimate"] <= 1e-14
+    assert np.max(np.abs(run.columns["theta"] - (np.pi - 4 * np.arctan(np.exp(-2 * t))))) <= 1e-15
+    assert np.max(np.abs(run.columns["theta_dot"] / (4 / np.cosh(2 * t)) - 1)) <= 1e-13

@@ -232,27 +232,29 @@ class EllipticMotion:
 
     # --- 40-digit evaluation, for the estimate -------------------------------------------------
 
+    def mp_den(self, sn, cn) -> Any:
+        """C + D w (mpmath numbers) as C cn² + (C + D) sn²: equal (cn² = 1 − sn²), and exact as w → 1 where
+        C + D = 0 (the hyperbolic quadratic, M(1) = ∞)."""
+        A, B, C, D = self.mobius
+        return C * cn * cn + (C + D) * sn * sn
+
     def mp_u(self, sn, cn, dn) -> Any:
         """u from the Jacobi functions (mpmath numbers), at the caller's precision."""
         A, B, C, D = self.mobius
-        w = sn * sn
-        return (A + B * w) / (C + D * w)
+        return (A + B * sn * sn) / self.mp_den(sn, cn)
 
     def mp_u_dot(self, sn, cn, dn) -> Any:
         """u̇ from the Jacobi functions (mpmath numbers): M'(w) ẇ."""
         A, B, C, D = self.mobius
-        w = sn * sn
-        return (B * C - A * D) / (C + D * w) ** 2 * 2 * self.kappa * sn * cn * dn
+        return (B * C - A * D) / self.mp_den(sn, cn) ** 2 * 2 * self.kappa * sn * cn * dn
 
     def u_mp(self, t) -> Any:
         """u(t) at the working precision (mpmath), as a reference for the doubles."""
         mp = _mp()
         with mp.workdps(DPS):
             v = self.kappa * mp.mpf(t) + self.v_start
-            sn = mp.ellipfun("sn", v, m=self.m)
-            A, B, C, D = self.mobius
-            w = sn * sn
-            return (A + B * w) / (C + D * w)
+            sn, cn = mp.ellipfun("sn", v, m=self.m), mp.ellipfun("cn", v, m=self.m)
+            return self.mp_u(sn, cn, None)
 
 
 class EllipticMotionCn(EllipticMotion):

@@ -451,14 +451,13 @@ class ClosedMotion:
         kap = mo.kappa
         A, B, C, D = mo.mobius
         det = B * C - A * D
-        w = sn * sn
         if self.kind == "steady":
             return mp.mpf(self.q0), mp.mpf(0)
         if self.kind == "rotation":
             return (mp.mpf(self.q_fold) + self.S * shape.scale * _am_mp(v, mo.m),
                     self.S * shape.scale * kap * dn)
         if self.kind == "libration through a fold":
-            den = C + D * w
+            den = mo.mp_den(sn, cn)
             if self.end == "a":
                 rho = mp.sqrt(abs(det / C) / abs(den))
                 sig = sn * rho
@@ -469,7 +468,15 @@ class ClosedMotion:
                 sig_dot = -kap * sn * dn * rho + cn * (-rho * D / (2 * den)) * 2 * kap * sn * cn * dn
             x = sig / mp.sqrt(2)
             if shape.local == "asin":
-                f, df = mp.asin(x), 1 / mp.sqrt(1 - x * x)
+                if self.other_fold is not None and x * x > mp.mpf(1) / 2:
+                    # 1 − x² = |u − u_o|/2 from the nearer end, as in the doubles (at 30 digits it too rounds to 0
+                    # on a separatrix late enough)
+                    b = mo.interval[1]
+                    near_b = not mp.isinf(b) and abs(mp.mpf(self.other_fold) - b) <= mp.mpf(10) ** -25
+                    rest = abs(det * cn * cn / ((C + D) * den) if near_b else u - mp.mpf(self.other_fold)) / 2
+                    f, df = mp.sign(x) * (mp.pi / 2 - mp.asin(mp.sqrt(rest))), 1 / mp.sqrt(rest)
+                else:
+                    f, df = mp.asin(x), 1 / mp.sqrt(1 - x * x)
             elif shape.local == "asinh":
                 f, df = mp.asinh(x), 1 / mp.sqrt(1 + x * x)
             else:
