@@ -306,6 +306,20 @@ def test_a_wrong_fold_fails_the_closed_forms_own_check(monkeypatch):
     assert "failed its own check" in result.report["note"]
 
 
+def test_a_reference_that_cannot_be_evaluated_is_a_reason_to_integrate(monkeypatch):
+    """A 30-digit reference that divides by zero (it did on the separatrix at t = 20 before its nearer-end form)
+    leaves the error unmeasured: auto integrates and says why, no ZeroDivisionError reaches the user."""
+    from mechderive.systems.lagrangian import closed
+
+    def broken(self, t, wanted):
+        raise ZeroDivisionError
+
+    monkeypatch.setattr(closed.ClosedMotion, "estimate", broken)
+    result = run_scene(_scene(["theta"], PENDULUM, G, dict(theta=2.0, theta_dot=0.0)))
+    assert result.report["method"] == "integrate"
+    assert "30-digit reference could not be evaluated" in result.report["note"]
+
+
 def test_asking_for_theta_builds_no_partial_fractions_of_phi(monkeypatch):
     from mechderive.solvers import quadrature_motion
 
