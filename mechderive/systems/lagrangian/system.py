@@ -289,7 +289,7 @@ class LagrangianSystem(System):
             estimate, per_column = motion.estimate(t, [w for w in state_wanted if w in wanted or needs_angles])
         except (ArithmeticError, ValueError) as exc:  # the 30-digit reference itself failed (a 0 or ∞ there)
             raise OutOfReach(f"the closed form's 30-digit reference could not be evaluated on this motion "
-                             f"({type(exc).__name__}: {exc or 'no detail'}): its error is not measured") from exc
+                             f"({type(exc).__name__}: {exc or 'no detail'}): its error is not measured") from None
         # never below the rounding of each column's own size (the sampled times may all sit where it is small)
         for name in per_column:
             per_column[name] = max(per_column[name], 4 * 2.0**-52 * float(np.max(np.abs(cols[name]))))
