@@ -65,9 +65,22 @@ def claims_checked_once(monkeypatch):
     monkeypatch.setattr(registry, "evaluate", verified)
 
 
+def _module_scoped(item) -> bool:
+    """True if ``item`` uses a fixture of module or class scope (a reference computed once per file)."""
+    info = getattr(item, "_fixtureinfo", None)
+    for defs in (getattr(info, "name2fixturedefs", None) or {}).values():
+        if defs and defs[-1].scope in ("module", "class", "package"):
+            return True
+    return False
+
+
 def pytest_collection_modifyitems(config, items):
-    # Every test that reads the catalog's verdicts runs in one worker (``--dist loadgroup``), after
-    # test_catalog has checked each claim there: the derivation scripts then replay, not re-verify.
+    # ``--dist loadgroup``: every test that reads the catalog's verdicts runs in one worker, after
+    # test_catalog has checked each claim there (the derivation scripts then replay, not re-verify); the
+    # tests of a file with a module- or class-scoped fixture share a worker, so that the fixture (the
+    # bench's --quick run, a 30-digit reference) is built once per session, not once per worker.
     for item in items:
         if "claims_checked_once" in getattr(item, "fixturenames", ()):
             item.add_marker(pytest.mark.xdist_group("catalog"))
+        elif _module_scoped(item):
+            item.add_marker(pytest.mark.xdist_group(item.module.__name__))
