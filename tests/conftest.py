@@ -66,10 +66,10 @@ def claims_checked_once(monkeypatch):
 
 
 def _module_scoped(item) -> bool:
-    """True if ``item`` uses a fixture of module or class scope (a reference computed once per file)."""
+    """True if ``item`` uses a fixture of its own file that is built once per file or session (a reference)."""
     info = getattr(item, "_fixtureinfo", None)
     for defs in (getattr(info, "name2fixturedefs", None) or {}).values():
-        if defs and defs[-1].scope in ("module", "class", "package"):
+        if defs and defs[-1].scope != "function" and getattr(defs[-1].func, "__module__", None) == item.module.__name__:
             return True
     return False
 

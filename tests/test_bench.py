@@ -20,7 +20,9 @@ from mechderive.cli import main
 from .conftest import ROOT, run_python
 
 
-@pytest.fixture(scope="module")
+# session scope: a worker runs other files' tests between this file's, and a module fixture would be torn
+# down and built again (measured: twice per session, 12 s each)
+@pytest.fixture(scope="session")
 def quick() -> dict:
     proc = run_python("-m", "mechderive.cli", "bench", "--quick", "--json", timeout=120)
     assert proc.returncode == 0, proc.stderr

@@ -35,7 +35,7 @@ T_SAMPLES = (1.0, 2.0, 3.0, 4.0)
 
 # --- the independent 30-digit reference ------------------------------------------------------
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def mp_reference() -> np.ndarray:
     """(ω, q) at T_SAMPLES from mpmath.odefun (Taylor series) at 30 digits; shape (4, 7)."""
     with mpmath.workdps(30):

@@ -41,7 +41,7 @@ MP_TIMES = (1.0, 2.0, 3.0)
 
 # --- the independent references ----------------------------------------------------------------
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def mp_reference() -> np.ndarray:
     """(ω, q) of the BASELINE case at MP_TIMES from mpmath.odefun at 30 digits; shape (3, 7)."""
     with mpmath.workdps(30):
@@ -88,7 +88,7 @@ def nutation_from_cubic(I1: float, I3: float, mgl: float, theta0: float, theta_d
         return float(mpmath.acos(u2)), float(mpmath.acos(u1)), float(period)
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def euler_angle_rhs():
     """θ̈, φ̈, ψ̈ from sympy.physics.mechanics (LagrangesMethod), lambdified; and the 'ZXZ' dcm."""
     from sympy.physics.mechanics import (LagrangesMethod, Lagrangian, Point, ReferenceFrame, RigidBody,

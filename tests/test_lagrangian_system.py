@@ -28,7 +28,7 @@ from mechderive.systems.lagrangian.system import EXAMPLE_SCENE
 SPHERICAL = "m*l**2/2*(theta_dot**2 + sin(theta)**2*phi_dot**2) + m*g*l*cos(theta)"
 
 
-@pytest.fixture(scope="module", params=["integrate", "exact"])
+@pytest.fixture(scope="session", params=["integrate", "exact"])
 def spherical_run(request):
     """The issue's scene, exactly (theta = 1, phi_dot = 2, rtol = 1e-10, 1001 samples over 10 s), integrated and
     by the closed form the toolkit finds itself (issue 16: ``auto`` takes it)."""

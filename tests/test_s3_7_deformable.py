@@ -29,7 +29,7 @@ S = sp.Symbol("s", real=True)
 X0 = np.array([float(v) for v in BASE_SHAPE])
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def conn():
     return three_mass_body().numeric()
 
@@ -231,7 +231,7 @@ def test_3_102_derivation_gives_the_standard_curvature():
 # ============================================================================ the falling cat
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def flip():
     return falling_cat(samples=61)
 

@@ -46,7 +46,7 @@ def _run(time: str, method: str = "exact"):
     return run_scene(load_scene(TOP.format(time=time, method=method)))
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def plain():
     return _run("t_end = 10.0\nsamples = 1001")
 
