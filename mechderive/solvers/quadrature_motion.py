@@ -503,16 +503,7 @@ def _elliptic_motion(coefficients: Sequence, u0: Any, direction: int, dps: int) 
         kappa = mp.sqrt(k2)
         m1 = 1 - m
         K = mp.ellipk(m)
-        # the start: w0 = M⁻¹(u0) in [0, 1], v0 = F(asin √w0 | m); v_s = ±v0 by the sign of ẇ = u̇/M'(w)
-        w0 = _inverse(mob, u0)
-        w0 = min(max(w0, mp.mpf(0)), mp.mpf(1))
-        v0 = mp.ellipf(mp.asin(mp.sqrt(w0)), m)
-        w_direction = direction * (1 if det / (C + D * w0) ** 2 > 0 else -1)
-        v_start = -v0 if w_direction < 0 else v0
-        if direction == 0:
-            # u̇(0) = 0: u starts at a turning point (q̇ = 0, or q on a fold of g), whatever rounding put u0
-            # a hair inside the interval (√ of it would shift the phase by ~1e-8); at m = 1 only a is one
-            v_start = mp.mpf(0) if w0 <= mp.mpf(1) / 2 or m == 1 else K
+        v_start = _start(mob, u0, direction, m, K)
         return EllipticMotion(tuple(c), (a, b), (a, b, cc, d), mob, m, m1, kappa, v_start, K, 2 * K / kappa, degree)
 
 
@@ -533,16 +524,25 @@ def _hyperbolic(c: list, roots: list, u0: Any, direction: int) -> EllipticMotion
     else:
         raise NotElliptic(f"expected u̇² = P(u0) ≥ 0, got P(u0) < 0 at u0 = {mp.nstr(u0, 10)} between the roots")
     mob = _mobius(a, mp.inf, d)
-    A, B, C, D = mob
     kappa = mp.sqrt(c[0] / 4)
-    w0 = _inverse(mob, u0)
-    w0 = min(max(w0, mp.mpf(0)), mp.mpf(1))
-    v0 = mp.ellipf(mp.asin(mp.sqrt(w0)), 1)
-    det = B * C - A * D
-    w_direction = direction * (1 if det / (C + D * w0) ** 2 > 0 else -1)
-    v_start = mp.mpf(0) if direction == 0 else (-v0 if w_direction < 0 else v0)
+    v_start = _start(mob, u0, direction, mp.mpf(1), mp.inf)
     return EllipticMotion(tuple(c), (a, mp.inf), (a, mp.inf, mp.inf, d), mob, mp.mpf(1), mp.mpf(0), kappa, v_start,
                           mp.inf, mp.inf, 2)
+
+
+def _start(mob: tuple, u0: Any, direction: int, m: Any, K: Any) -> Any:
+    """v_s: w0 = M⁻¹(u0) in [0, 1], v0 = F(asin √w0 | m), v_s = ±v0 by the sign of ẇ = u̇/M'(w)."""
+    mp = _mp()
+    A, B, C, D = mob
+    w0 = _inverse(mob, u0)
+    w0 = min(max(w0, mp.mpf(0)), mp.mpf(1))
+    if direction == 0:
+        # u̇(0) = 0: u starts at a turning point (q̇ = 0, or q on a fold of g), whatever rounding put u0
+        # a hair inside the interval (√ of it would shift the phase by ~1e-8); at m = 1 only a is one
+        return mp.mpf(0) if w0 <= mp.mpf(1) / 2 or m == 1 else K
+    v0 = mp.ellipf(mp.asin(mp.sqrt(w0)), m)
+    w_direction = direction * (1 if (B * C - A * D) / (C + D * w0) ** 2 > 0 else -1)
+    return -v0 if w_direction < 0 else v0
 
 
 def _steady(c: list, degree: int, double: Any, curvature: Any) -> EllipticMotion:
