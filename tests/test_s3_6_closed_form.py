@@ -136,6 +136,9 @@ def test_configurations_not_covered_are_refused_with_the_reason():
         elliptic_motion([1.0, 2.0], 0.0, 1)
     with pytest.raises(NotElliptic, match="complex roots"):
         elliptic_motion([1.0, 0.0, 1.0], 2.0, 1)  # u̇² = u² + 1: no real root, u passes through every value
+    # roots 1e-25 apart, resolved by the 40-digit roots: a periodic motion of period ~ln(1e25)/κ, not a separatrix
+    with pytest.raises(NotElliptic, match="1.0e-25 apart"):
+        elliptic_motion(["-1", "-1.0000000000000000000000001", "1.0", "1.0000000000000000000000001"], 0.3, 1)
     motion = elliptic_motion(np.poly((0.0, 1.0, 1.0)), 0.0, 0)  # a separatrix: its rates are refused
     with pytest.raises(NotElliptic, match="m = 1"):
         rate_integral(motion, [1.0], [1.0, 2.0])

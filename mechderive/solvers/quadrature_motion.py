@@ -417,6 +417,13 @@ def _elliptic_motion(coefficients: Sequence, u0: Any, direction: int, dps: int) 
             if len(close) > 1 or degree == 2:
                 raise NotElliptic("expected at most one double root of P, away from the start, got "
                                   f"{len(close)} (a degenerate P)")
+            # a separatrix only if the root is double to the working precision (polyroots, with its extra digits,
+            # returns an exact double root's pair ~10^-DPS apart): roots 1e-25 apart are a periodic motion whose
+            # period (~ln(1/δ)/κ) a separatrix would get wrong after t ~ ln(1/δ)/κ, with a small estimate
+            if abs(x - y) > mp.mpf(10) ** (-DPS + 5) * (1 + abs(double)):
+                raise NotElliptic(f"expected a double root of P or roots the 40-digit constants resolve, got two roots "
+                                  f"{mp.nstr(abs(x - y), 3)} apart near u = {mp.nstr(double, 10)}: a motion this near "
+                                  "a separatrix is not covered")
             # a separatrix: the motion runs from its turning point towards the double root in infinite time;
             # the double root is two coincident branch points, so m = 1 below (sn = tanh)
             roots = [double if r in (x, y) else r for r in roots]
