@@ -55,21 +55,8 @@ def test_asking_for_u_alone_neither_derives_nor_evaluates_phi_or_psi(tmp_path):
     assert "HeavyTopExactModel.nutation_constants" in rep["derived"]
 
 
-def test_second_run_uses_the_disk_cache_and_never_imports_sympy(tmp_path):
-    env = {"MECHDERIVE_CACHE_DIR": str(tmp_path / "cache")}
-    code = ("import sys, json\nfrom mechderive.cli import main\n"
-            f"main(['run', '-o', {str(tmp_path / 'out.csv')!r}, '--json'])\n"
-            "print('SYMPY', 'sympy' in sys.modules)\n")
-    first = run_python("-c", code, env=env)
-    second = run_python("-c", code, env=env)
-    assert first.returncode == 0 and second.returncode == 0, first.stderr + second.stderr
-    assert "SYMPY True" in first.stdout and "SYMPY False" in second.stdout
-    report = json.loads(second.stdout[: second.stdout.rindex("SYMPY")])
-    assert report["derived"] == [] and all(c.endswith("(disk)") for c in report["compiled"])
-    # the cold run's stages are net of what they derived: solving 2001 samples takes measurable time
-    cold = json.loads(first.stdout[: first.stdout.rindex("SYMPY")])["timings"]
-    assert cold["derive"] > 0 and cold["solve"] > 0
-    assert cold["derive"] + cold["compile"] + cold["solve"] <= cold["total"] + 1e-6
+# The second run of the default scene from the disk cache, never importing SymPy: tests/test_bench.py
+# (test_cold_start_splits_stages_and_the_warm_run_reads_the_disk_cache), on the bench's own cold and warm runs.
 
 
 def test_auto_picks_the_closed_form_and_agrees_with_integration():
