@@ -65,27 +65,28 @@ def claims_checked_once(monkeypatch):
     monkeypatch.setattr(registry, "evaluate", verified)
 
 
-def _module_scoped(item) -> bool:
-    """True if ``item`` uses a fixture of its own file that is built once per file or session (a reference)."""
-    info = getattr(item, "_fixtureinfo", None)
-    for defs in (getattr(info, "name2fixturedefs", None) or {}).values():
-        if defs and defs[-1].scope != "function" and getattr(defs[-1].func, "__module__", None) == item.module.__name__:
-            return True
-    return False
+#: the groups that take longest (measured 2026-11-28, a minute to 10 s each), started first
+LONGEST_GROUPS = ("catalog", "tests.test_s3_6_closed_form", "tests.test_s3_7_deformable", "tests.test_heavy_top_integrate",
+                  "tests.test_derive", "tests.test_stress", "tests.test_sweep", "tests.test_bench", "tests.test_s3_2_inertia",
+                  "tests.test_s3_1_path_ordered", "tests.test_prefetch", "tests.test_doctests")
 
 
 @pytest.hookimpl(tryfirst=True)  # before xdist's own hook, which reads the groups
 def pytest_collection_modifyitems(config, items):
-    # ``--dist loadgroup``: every test that reads the catalog's verdicts runs in one worker, after
-    # test_catalog has checked each claim there (the derivation scripts then replay, not re-verify); the
-    # tests of a file with a module- or class-scoped fixture share a worker, so that the fixture (the
-    # bench's --quick run, a 30-digit reference) is built once per session, not once per worker.
+    # ``--dist loadgroup`` with one group a file: a file's tests run in one worker, so what they derive (a
+    # body's inertia, the cat's connection: 40% of the suite's time is SymPy deriving) and their module- or
+    # session-scoped references (the bench's --quick run, 30-digit integrations) are built in one process,
+    # not in both (measured: 225 → 160 s of derivation in all).  Every test that reads the catalog's
+    # verdicts joins test_catalog's group, which checks each claim once (the derivation scripts then replay).
+    group = {}
     for item in items:
-        if "claims_checked_once" in getattr(item, "fixturenames", ()):
-            item.add_marker(pytest.mark.xdist_group("catalog"))
-        elif _module_scoped(item):
-            item.add_marker(pytest.mark.xdist_group(item.module.__name__))
-
+        catalog = "claims_checked_once" in getattr(item, "fixturenames", ()) or item.module.__name__.endswith("test_catalog")
+        group[item] = "catalog" if catalog else item.module.__name__
+        item.add_marker(pytest.mark.xdist_group(group[item]))
+    # xdist hands the groups out in collection order: the longest first, so that no long group starts
+    # last while the other worker idles (longest-processing-time-first; a stale order costs time, not results)
+    items.sort(key=lambda item: LONGEST_GROUPS.index(group[item]) if group[item] in LONGEST_GROUPS
+               else len(LONGEST_GROUPS))
 
 
 class _XdistGroupsOnPytest9:
@@ -112,3 +113,4 @@ class _XdistGroupsOnPytest9:
 def pytest_configure(config):
     if hasattr(config, "workerinput"):  # in an xdist worker, where the groups are written into the ids
         config.pluginmanager.register(_XdistGroupsOnPytest9(), "xdist-groups-on-pytest-9")
+
