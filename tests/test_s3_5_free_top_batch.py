@@ -96,13 +96,17 @@ def _sample(rng, n, *, physical):
     return I, w
 
 
-def test_every_answered_point_equals_the_single_path():
+@pytest.mark.parametrize("share", [0.4, pytest.param(1.0, marks=pytest.mark.slow)])
+def test_every_answered_point_equals_the_single_path(share):
+    # each single path costs ~10 ms: 40% of the 460 points by default, all of them with -m slow
     rng = np.random.default_rng(20261128)
     worst: dict[str, float] = {}
     answered = 0
     symmetric = ("polhode_period", "period", "energy", "angular_momentum", "precession_rate", "stability")
     cases = ((False, 300, PLAIN), (True, 60, PLAIN + ("stability",)), ("symmetric", 40, symmetric),
              ("separatrix", 60, PLAIN))
+    cases = tuple((physical, round(share * n), names) for physical, n, names in cases)
+    total = sum(n for _, n, _ in cases)
     for physical, n, names in cases:
         if physical == "symmetric":
             I, w = _symmetric_sample(rng, n)
@@ -121,8 +125,8 @@ def test_every_answered_point_equals_the_single_path():
             # the estimate is honest: it covers the difference from the correctly rounded single path
             P, P1 = out.values["polhode_period"][i], single["polhode_period"]
             assert abs(P - P1) <= out.errors["polhode_period"][i] + np.spacing(P1)
-    print(f"\nanswered {answered} of 460 points; largest relative difference per quantity: {worst}")
-    assert answered >= 340
+    print(f"\nanswered {answered} of {total} points; largest relative difference per quantity: {worst}")
+    assert answered >= 0.74 * total  # 340 of 460 in the full sample
     assert max(worst.values()) <= 1e-12
 
 
