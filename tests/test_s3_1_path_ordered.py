@@ -149,8 +149,9 @@ class TestCommutatorSign_3_16:
         d1 = integ(A(s1), s1, 0, h)
         d2 = integ(integ(order(A(s1), A(s2)), s2, 0, s1), s1, 0, h)  # s2 < s1: s1 is later
         d3 = integ(integ(integ(order(A(s1), A(s2), A(s3)), s3, 0, s2), s2, 0, s1), s1, 0, h)
-        x = d1 + d2 + d3
-        log_series = self._truncate(x - x * x / 2 + x * x * x / 3, h, 3)  # log(1 + X) through h³
+        x = d1 + d2 + d3  # d_k is O(h^k): through h³, X² is d1² + d1 d2 + d2 d1 and X³ is d1³
+        x2, x3 = d1 * d1 + d1 * d2 + d2 * d1, d1 * d1 * d1
+        log_series = self._truncate(x - x2 / 2 + x3 / 3, h, 3)  # log(1 + X) through h³
         k = sp.Symbol("k")
         c1, c2 = sp.Rational(1, 2) - sp.sqrt(3) / 6, sp.Rational(1, 2) + sp.sqrt(3) / 6
         a1, a2 = A(c1 * h), A(c2 * h)
