@@ -66,7 +66,7 @@ def claims_checked_once(monkeypatch):
 
 
 #: the groups that take longest (measured 2026-11-28, a minute to 10 s each), started first
-LONGEST_GROUPS = ("catalog", "tests.test_s3_6_closed_form", "tests.test_s3_7_deformable", "tests.test_heavy_top_integrate",
+LONGEST_GROUPS = ("catalog", "tests.test_s3_6_closed_form", "tests.test_heavy_top_integrate",
                   "tests.test_derive", "tests.test_stress", "tests.test_sweep", "tests.test_bench", "tests.test_s3_2_inertia",
                   "tests.test_s3_1_path_ordered", "tests.test_prefetch", "tests.test_doctests")
 
@@ -77,10 +77,12 @@ def pytest_collection_modifyitems(config, items):
     # body's inertia, the cat's connection: 40% of the suite's time is SymPy deriving) and their module- or
     # session-scoped references (the bench's --quick run, 30-digit integrations) are built in one process,
     # not in both (measured: 225 → 160 s of derivation in all).  Every test that reads the catalog's
-    # verdicts joins test_catalog's group, which checks each claim once (the derivation scripts then replay).
+    # verdicts joins test_catalog's group, which checks each claim once (the derivation scripts then replay),
+    # and so do the §3.7 tests: the falling cat's connection (~7 s) is derived once, for them and the claims.
     group = {}
     for item in items:
-        catalog = "claims_checked_once" in getattr(item, "fixturenames", ()) or item.module.__name__.endswith("test_catalog")
+        catalog = ("claims_checked_once" in getattr(item, "fixturenames", ())
+                   or item.module.__name__ in ("tests.test_catalog", "tests.test_s3_7_deformable"))
         group[item] = "catalog" if catalog else item.module.__name__
         item.add_marker(pytest.mark.xdist_group(group[item]))
     # xdist hands the groups out in collection order: the longest first, so that no long group starts
