@@ -57,7 +57,8 @@ def test_check_fails_when_a_member_is_perturbed(claim, k):
     # A check that passes a wrong formula is a defect: feed it one, one member at a time.
     name, wrong = _wrong_forms(claim)[k]
     right = _passing_form(claim)
-    assert repr(wrong) != repr(right), f"the perturbation left {name} unchanged"
+    # structural inequality (repr of §3.7's long matrices took a second a test; the two agree on every claim)
+    assert wrong != right, f"the perturbation left {name} unchanged"
     outcome = claim.check(wrong)
     assert not outcome.passed, f"{'corrected' if claim.corrected else 'printed'} form with {name} perturbed " \
                                f"passes: {outcome.detail}"
@@ -98,7 +99,7 @@ def test_misprint_entries_perturb_their_corrected_form():
     misprints = [c for c in CLAIMS if c.corrected is not None]
     assert {c.equation for c in misprints} >= {"3.16", "3.102", "3.103"}
     for c in misprints:
-        assert c.corrected is not None and repr(_passing_form(c)) == repr(c.corrected())
+        assert c.corrected is not None and _passing_form(c) == c.corrected()
 
 
 def _falling_cat_claim():
