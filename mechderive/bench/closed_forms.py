@@ -6,7 +6,8 @@ code cached, as a second run in one process is):
 
 * ``setup``: the motion's constants from the start (E and the momenta at 55 digits, the roots of P, m, κ, the
   start's phase, the partial fractions of every cyclic rate) — :func:`~mechderive.systems.lagrangian.closed.closed_motion`;
-* ``2001 samples``: every coordinate at 2001 times over ten periods of the reduced motion;
+* ``2001 samples``: every coordinate at 2001 times over ten periods of the reduced motion (ten time scales 1/κ
+  for a motion with no period: on a separatrix);
 * ``DOP853``: the compiled DOP853 (the ``integrate`` method's stepper, without its error-estimating rerun)
   over the same samples at the loosest rtol among 1e-8 … 1e-13 whose error against the closed form is
   within 10× the closed form's own (measured) estimate, or its tightest if none is.
@@ -41,6 +42,9 @@ CASES: tuple = (
     ("pendulum, libration", ["theta"], _PENDULUM, _G, {"theta": 2.0, "theta_dot": 0.0}),
     ("pendulum, rotation", ["theta"], _PENDULUM, _G, {"theta": 0.0, "theta_dot": 7.0}),
     ("pendulum, 1e-5 below the separatrix", ["theta"], _PENDULUM, _G, {"theta": 0.0, "theta_dot": 6.2641}),
+    # g = 4 and θ̇0 = 4 are exact in binary: E is the top's potential energy to the last bit (m = 1, no period)
+    ("pendulum on the separatrix", ["theta"], _PENDULUM, {"m": 1.0, "l": 1.0, "g": 4.0},
+     {"theta": 0.0, "theta_dot": 4.0}),
     ("double well over the hump (u = x²)", ["x"], "x_dot**2/2 + x**2/2 - x**4/4", {}, {"x": 0.5, "x_dot": 1.0}),
     ("Kepler in t (u = 1/r along φ only)", ["r", "phi"], "m/2*(r_dot**2 + r**2*phi_dot**2) + k/r",
      {"m": 1.0, "k": 1.0}, {"r": 1.0, "phi": 0.0, "r_dot": 0.1, "phi_dot": 1.2}),
@@ -70,8 +74,10 @@ def _case(label: str, coordinates: list, lagrangian: str, parameters: dict, init
     except OutOfReach as exc:
         row["reason"] = str(exc)
         return row
-    # 10.37 and 1000.37 periods: a grid commensurate with the period would sample one phase only
-    t = np.linspace(0.0, 10.37 * float(motion.period), 2001)
+    # 10.37 and 1000.37 periods: a grid commensurate with the period would sample one phase only; a motion
+    # with no period (m = 1: a separatrix) over as many of its time scales 1/κ
+    scale = float(motion.time_scale)
+    t = np.linspace(0.0, 10.37 * scale, 2001)
     wanted = list(coordinates)
     repeats = 3 if quick else 10
     start = time.perf_counter()
@@ -79,7 +85,7 @@ def _case(label: str, coordinates: list, lagrangian: str, parameters: dict, init
         cols = motion.columns(t, wanted)
     evaluate = (time.perf_counter() - start) / repeats
     estimate, _ = motion.estimate(t, wanted)
-    row.update(kind=motion.kind, setup=setup, evaluate=evaluate, error=estimate)
+    row.update(kind=motion.describe()["motion"], setup=setup, evaluate=evaluate, error=estimate)
     # DOP853 at comparable error: the loosest rtol whose distance to the closed form is ≤ 10× its estimate
     from ..solvers.driver import integrate
 
@@ -98,7 +104,7 @@ def _case(label: str, coordinates: list, lagrangian: str, parameters: dict, init
         if error <= 10 * max(estimate, 1e-15):
             break
     # a long run: 2001 samples over 1000 periods — the closed form's cost does not grow, DOP853's does
-    long_t = np.linspace(0.0, 1000.37 * float(motion.period), 2001)
+    long_t = np.linspace(0.0, 1000.37 * scale, 2001)
     start = time.perf_counter()
     long_cols = motion.columns(long_t, wanted)
     best["closed_long"] = time.perf_counter() - start
