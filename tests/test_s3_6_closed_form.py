@@ -132,8 +132,8 @@ def test_configurations_not_covered_are_refused_with_the_reason():
         elliptic_motion(np.poly((0.0, 1.0, 1.0)), 1.0, 0)  # on the double root, P'' > 0: unstable equilibrium
     with pytest.raises(NotElliptic, match="P\\(u0\\) ≥ 0"):
         elliptic_motion(-np.poly((0.0, 1.0, 1.0)), 0.5, 1)  # P < 0 there
-    with pytest.raises(NotElliptic, match="degree 2, 3 or 4"):
-        elliptic_motion([1.0, 2.0], 0.0, 1)
+    with pytest.raises(NotElliptic, match="degree ≤ 4"):
+        elliptic_motion([1.0, 0.0, 0.0, 0.0, 0.0, 2.0], 0.0, 1)
     with pytest.raises(NotElliptic, match="complex roots"):
         elliptic_motion([1.0, 0.0, 1.0], 2.0, 1)  # u̇² = u² + 1: no real root, u passes through every value
     # roots 1e-25 apart, resolved by the 40-digit roots: a periodic motion of period ~ln(1e25)/κ, not a separatrix
@@ -142,6 +142,97 @@ def test_configurations_not_covered_are_refused_with_the_reason():
     motion = elliptic_motion(np.poly((0.0, 1.0, 1.0)), 0.0, 0)  # a separatrix: its rates are refused
     with pytest.raises(NotElliptic, match="m = 1"):
         rate_integral(motion, [1.0], [1.0, 2.0])
+
+
+# --- degree ≤ 1: uniform and uniformly accelerated motion -------------------------------------------------------
+
+LINEAR = [
+    # (name, P's coefficients, u0, direction): P = c1 u + c0, u = u0 + u̇0 t + (c1/4) t²
+    ("uniform, forwards", [2.0], 0.3, 1),
+    ("uniform, backwards", [2.0], 0.3, -1),
+    ("accelerated, c1 > 0, outwards", [1.5, -0.5], 1.0, 1),
+    ("accelerated, c1 > 0, towards the root first", [1.5, -0.5], 1.0, -1),
+    ("accelerated, c1 < 0, thrown up", [-2.0, 1.0], 0.0, 1),
+    ("accelerated, c1 < 0, from the root", [-2.0, 1.0], 0.5, 0),
+    ("accelerated, c1 > 0, from the root", [2.0, -1.0], 0.5, 0),
+]
+
+
+@pytest.mark.parametrize("name, coeffs, u0, direction", LINEAR, ids=[c[0] for c in LINEAR])
+def test_u_of_t_for_degree_at_most_one(name, coeffs, u0, direction):
+    motion = elliptic_motion(coeffs, u0, direction)
+    t = np.linspace(0.0, 3.0, 301)
+    ref, _ = _ode_reference(coeffs, u0, direction, t)
+    # DOP853 integrates ü = c1/2 exactly up to rounding (its error estimate is zero on a quadratic): ~10 ulp
+    assert np.max(np.abs(motion.u(t) - ref)) <= 1e-14 * (1 + np.max(np.abs(ref)))
+    # by hand: u0 + u̇0 t + c1 t²/4 with u̇0 = ±√P(u0), and from the root (u̇0 = 0) towards the side of c1's sign
+    c1 = coeffs[0] if len(coeffs) == 2 else 0.0
+    speed = direction * np.sqrt(np.polyval(coeffs, u0))
+    hand = u0 + speed * t + c1 * t**2 / 4
+    assert np.max(np.abs(motion.u(t) - hand)) <= 4e-16 * np.max(np.abs(hand))
+    assert np.max(np.abs(motion.u_dot(t) - (speed + c1 * t / 2))) <= 4e-16 * (1 + np.max(np.abs(speed + c1 * t)))
+    if direction == 0:
+        assert np.all(np.sign(motion.u(t[1:]) - u0) == np.sign(c1))
+    # no period; the root (if any) is the turning point
+    assert not np.isfinite(float(motion.u_period)) and motion.escape_times is None
+    if c1:
+        assert float(motion.turning_point) == -coeffs[1] / c1
+
+
+def test_degree_at_most_one_refuses_what_is_no_motion():
+    with pytest.raises(NotElliptic, match="P = -2.0 < 0"):
+        elliptic_motion([-2.0], 0.0, 1)
+    with pytest.raises(NotElliptic, match="P\\(u0\\) ≥ 0"):
+        elliptic_motion([1.0, -1.0], 0.5, 1)  # P(0.5) = −0.5
+    with pytest.raises(NotElliptic, match="direction"):
+        elliptic_motion([2.0], 0.0, 0)  # u̇² = 2 but no direction given: not a start at rest
+    at_rest = elliptic_motion([0.0], 0.7, 0)  # P ≡ 0: at rest
+    assert at_rest.steady and np.all(at_rest.u(np.linspace(0, 5, 6)) == 0.7)
+
+
+def _fall(initial, **scene):
+    return run_scene(_scene(["z"], "m*z_dot**2/2 - m*g*z", dict(m=2.0, g=9.81), initial, **scene))
+
+
+def test_body_falling_under_uniform_gravity_is_solved_exactly_by_auto():
+    """L = m ż²/2 − m g z: u = z, P = 2E/m − 2 g z (degree 1); z = z0 + ż0 t − g t²/2 by hand."""
+    result = _fall(dict(z=1.0, z_dot=3.0), t_end=4.0, samples=401, summary=["z_min", "z_max", "period"])
+    assert result.report["method"] == "exact", result.report.get("note")
+    assert result.report["details"]["closed_form"]["motion"] == "unbounded: uniformly accelerated"
+    t = np.linspace(0.0, 4.0, 401)
+    z, zd = 1.0 + 3.0 * t - 9.81 * t**2 / 2, 3.0 - 9.81 * t
+    # the closed form is the same polynomial with constants rounded once: a few ulp of the largest |z| (~67)
+    assert np.max(np.abs(result.columns["z"] - z)) <= 4 * 2.0**-52 * np.max(np.abs(z))
+    assert np.max(np.abs(result.columns["z_dot"] - zd)) <= 4 * 2.0**-52 * np.max(np.abs(zd))
+    assert result.report["error_estimate"] <= 1e-13
+    # the top of the throw z0 + ż0²/(2g) is the turning point; there is no lowest point and no period
+    s, e = result.report["summary"], result.report["summary_error"]
+    # its estimate: z_max moved by E's rounding (8 ulp of the run's energy scale ~1.3e3) over m g, ~1e-13
+    assert abs(s["z_max"] - (1.0 + 9.0 / (2 * 9.81))) <= 1e-15 * 2 and e["z_max"] <= 1e-12
+    assert s["z_min"] is None and "not bounded" in e["z_min"]
+    assert s["period"] is None and "uniformly accelerated" in e["period"]
+
+
+def test_body_dropped_from_rest_falls_from_its_turning_point():
+    result = _fall(dict(z=10.0, z_dot=0.0), t_end=1.0, samples=11, summary=["z_max"])
+    t = np.linspace(0.0, 1.0, 11)
+    assert result.report["method"] == "exact"
+    assert np.max(np.abs(result.columns["z"] - (10.0 - 9.81 * t**2 / 2))) <= 4e-15 * 10
+    assert result.report["summary"]["z_max"] == 10.0
+
+
+def test_free_rotor_turns_uniformly():
+    """L = J θ̇²/2: θ is the only coordinate and is cyclic; it is the coordinate solved (P = 2E/J constant):
+    θ = θ0 + θ̇0 t by hand."""
+    result = run_scene(_scene(["theta"], "J*theta_dot**2/2", dict(J=2.0), dict(theta=0.1, theta_dot=-0.7),
+                              t_end=100.0, samples=101, summary=["period"]))
+    assert result.report["method"] == "exact", result.report.get("note")
+    assert result.report["details"]["closed_form"]["motion"] == "unbounded: uniform motion"
+    t = np.linspace(0.0, 100.0, 101)
+    # θ0 + θ̇0 t with θ̇0 = −√(2E/J) (E from the doubles, one rounding): a few ulp of |θ| ≤ 70
+    assert np.max(np.abs(result.columns["theta"] - (0.1 - 0.7 * t))) <= 4 * 2.0**-52 * 70
+    assert np.all(result.columns["theta_dot"] == -0.7)
+    assert result.report["summary"]["period"] is None
 
 
 # m = 1: from a turning point towards a double root of P (a separatrix), or to ∞ where the quadratic's P has its
@@ -213,6 +304,10 @@ SYSTEMS = [
     ("double well, homoclinic", ["x"], "x_dot**2/2 + x**2/2 - x**4/2", {}, dict(x=1.0, x_dot=0.0),
      "separatrix: towards an unstable equilibrium"),
     ("bead on a rotating rod", ["r"], "r_dot**2/2 + w**2*r**2/2", dict(w=2.0), dict(r=1.0, r_dot=-1.5), "unbounded"),
+    # degree ≤ 1: a projectile's height (uniform gravity) and a free rotor (its only coordinate cyclic)
+    ("body thrown up under uniform gravity", ["z"], "m*z_dot**2/2 - m*g*z", dict(m=1.0, g=9.81), dict(z=1.0, z_dot=20.0),
+     "unbounded: uniformly accelerated"),
+    ("free rotor", ["theta"], "J*theta_dot**2/2", dict(J=0.3), dict(theta=0.5, theta_dot=2.5), "unbounded: uniform motion"),
 ]
 
 

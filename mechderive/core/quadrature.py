@@ -37,11 +37,12 @@ import sympy as sp
 
 from ..errors import DerivationError
 from .lagrangian import LagrangianModel
+from .model import derived
 from .simplify import trig_normal
 
 __all__ = ["Quadrature", "Substitution", "Oscillation", "NoQuadrature", "NoSubstitution", "SUBSTITUTIONS",
            "reduce_to_quadrature", "find_substitution", "oscillation", "MAX_DEGREE", "Shape", "SHAPES",
-           "cyclic_rates", "without_time_gauge"]
+           "cyclic_rates", "without_time_gauge", "one_free_coordinate"]
 
 #: the largest degree of u̇² = P(u) solved by elliptic functions
 MAX_DEGREE = 4
@@ -418,6 +419,23 @@ def cyclic_rates(model: LagrangianModel, substitution: Substitution) -> dict:
             continue
         out[name] = (N, D)
     return out
+
+
+class _NothingCyclic(LagrangianModel):
+    """A model of one coordinate with no coordinate counted as cyclic (see :func:`one_free_coordinate`)."""
+
+    @derived
+    def cyclic_coordinates(self) -> tuple:
+        return ()
+
+
+def one_free_coordinate(model: LagrangianModel) -> LagrangianModel:
+    """``model`` itself, or, where its only coordinate is cyclic (L = I θ̇²/2: a free rotor), the same L with that
+    coordinate counted as the one left (the reduction by it would leave none): q̇² = F = 2E/M(q̇ only), a constant P
+    under u = q, whose closed form is uniform motion."""
+    if len(model.coordinates) != 1 or model.remaining_coordinates:
+        return model
+    return _NothingCyclic(model.lagrangian, list(model.coordinates))
 
 
 # --- explicit time that is only a gauge ----------------------------------------------------------------

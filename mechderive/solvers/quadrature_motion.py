@@ -37,9 +37,13 @@ x = sech t), or the unbounded quadratic P = c0 (u − r1)(u − r2), c0 > 0, who
 (u = r + (r − r') sinh²(κt + v_s), κ² = c0/4: the bead on a turning rod, r̈ = ω² r).  No period; the phase
 is not reduced (K = ∞).
 
+Degree ≤ 1 — uniform motion (a free particle, a free rotor) and uniformly accelerated motion (a body under
+uniform gravity), u = u0 + u̇0 t + (c1/4) t² — is solved in :mod:`mechderive.solvers.quadrature_open`, to which
+:func:`elliptic_motion` hands it.
+
 Not covered (the caller integrates instead; :class:`NotElliptic` says why): a quartic with only complex
 roots or escaping through infinity, a cubic with one real root, a quadratic with no real root (no turning
-point), degree ≤ 1, an unstable equilibrium (a start on a double root with P'' > 0), the cyclic rates at
+point), an unstable equilibrium (a start on a double root with P'' > 0), the cyclic rates at
 m = 1, and rates with complex poles, poles on the motion, or a polynomial part of degree > 1 in w.
 """
 
@@ -248,6 +252,17 @@ class EllipticMotion:
         A, B, C, D = self.mobius
         return (B * C - A * D) / self.mp_den(sn, cn) ** 2 * 2 * self.kappa * sn * cn * dn
 
+    @property
+    def escape_times(self) -> tuple[float, float] | None:
+        """(t₋, t₊): where M(1) = ∞ (the cubic's unbounded branch u ≥ r3, B&F 238.00) u reaches ∞ at w = 1, i.e. at
+        v = ±K around the start (v_s in [−K, K]): a blow-up in finite time, before and after t = 0.  None where u
+        stays finite (a bounded motion, or m = 1 where ∞ is approached in infinite time)."""
+        mp = _mp()
+        if self.steady or self.asymptotic or not mp.isinf(self.interval[1]):
+            return None
+        with mp.workdps(DPS):
+            return float((-self.K - self.v_start) / self.kappa), float((self.K - self.v_start) / self.kappa)
+
     def u_mp(self, t) -> Any:
         """u(t) at the working precision (mpmath), as a reference for the doubles."""
         mp = _mp()
@@ -389,13 +404,16 @@ def _elliptic_motion(coefficients: Sequence, u0: Any, direction: int, dps: int) 
     mp = _mp()
     with mp.workdps(dps):
         c = [mp.mpf(x) for x in coefficients]
-        while c and c[0] == 0:
+        while len(c) > 1 and c[0] == 0:
             c = c[1:]
         degree = len(c) - 1
-        if degree < 2:
-            raise NotElliptic(f"expected u̇² = P(u) of degree 2, 3 or 4, got degree {degree}: uniform or "
-                              "uniformly accelerated motion, not periodic")
+        if degree > 4:
+            raise NotElliptic(f"expected u̇² = P(u) of degree ≤ 4, got degree {degree}")
         u0 = mp.mpf(u0)
+        if degree < 2:  # uniform or uniformly accelerated: polynomial in t (quadrature_open)
+            from .quadrature_open import open_motion
+
+            return open_motion(c, [], u0, direction)
         P = lambda x: mp.polyval(c, x)  # noqa: E731
         roots = _real_roots(c)
         if degree == 4 and len(roots) == 2:
@@ -686,9 +704,12 @@ def rate_integral(motion: EllipticMotion, numerator: Sequence, denominator: Sequ
     mpmath reads); raises :class:`NotElliptic` where the partial fractions in w are not the simple kind the
     module docstring lists."""
     mp = _mp()
+    if getattr(motion, "elementary", False):
+        raise NotElliptic("expected a periodic motion for a cyclic coordinate's rate, got an unbounded one in "
+                          "elementary functions of t (its rates are not covered)")
     if isinstance(motion, EllipticMotionCn):
-        raise NotElliptic("expected a motion in sn² for a cyclic coordinate's Π, got a quartic with complex roots "
-                          "(its rates are not covered)")
+        raise NotElliptic("expected a motion in sn² for a cyclic coordinate's Π, got a cn form (a quartic with "
+                          "complex roots, or a cubic with one real root): its rates are not covered")
     if motion.asymptotic:
         raise NotElliptic("expected a periodic motion for a cyclic coordinate's Π, got m = 1 (a separatrix or a "
                           "hyperbolic escape): its rates are not covered")

@@ -143,9 +143,10 @@ class ClosedMotion:
         folds = [e for e in ends if e]
         if motion.steady:
             folds = []
-        if folds and isinstance(motion, EllipticMotionCn):
-            raise OutOfReach(f"the reduction {found.name} reaches a fold of the substitution on a quartic with "
-                             "complex roots: not covered")
+        elementary = getattr(motion, "elementary", False)
+        if folds and (isinstance(motion, EllipticMotionCn) or elementary):
+            raise OutOfReach(f"the reduction {found.name} reaches a fold of the substitution on a motion in cn or in "
+                             "elementary functions (complex roots of P, or degree ≤ 2 unbounded): not covered")
         if len(folds) == 2:
             if motion.mobius[3] != 0:
                 raise OutOfReach(f"a rotation through both folds of {found.name} with a quartic P: not covered")
@@ -165,8 +166,15 @@ class ClosedMotion:
             self.kind = "steady"
         elif motion.asymptotic and np.isfinite(float(b)):
             self.kind = "separatrix: towards an unstable equilibrium"
+        elif np.isfinite(float(b)):
+            self.kind = "oscillation between turning points"
+        elif elementary:
+            self.kind = {"polynomial": "unbounded: uniformly accelerated" if motion.degree == 1 else
+                         "unbounded: uniform motion", "exponential": "unbounded: no turning point"}[motion.form]
+        elif motion.escape_times is not None:
+            self.kind = "unbounded: reaches infinity in finite time"
         else:
-            self.kind = "oscillation between turning points" if np.isfinite(float(b)) else "unbounded"
+            self.kind = "unbounded"
         if found.name == "u = 1/q" and float(min(a, b)) <= 0 <= float(max(a, b)):
             # u = 1/q passes 0: q escapes to ±∞ there (Kepler's hyperbola along φ); past it u has no meaning
             self.kind = "unbounded: q → ∞ where u = 1/q reaches 0"
@@ -187,7 +195,7 @@ class ClosedMotion:
         # infinite at m = 1 (a separatrix, a hyperbolic escape)
         self.period = motion.u_period * (2 if self.kind == "libration through a fold" else 1)
         #: the motion's time scale: its period, or 1/κ where there is none
-        self.time_scale = float(self.period) if not motion.asymptotic else 1.0 / float(motion.kappa)
+        self.time_scale = float(self.period) if np.isfinite(float(self.period)) else 1.0 / float(motion.kappa)
 
     # --- constants --------------------------------------------------------------------------------
 
@@ -288,9 +296,14 @@ class ClosedMotion:
         mo = self.motion
         kind = self.kind if not mo.asymptotic or self.kind.startswith(("separatrix", "unbounded")) else \
             f"{self.kind}, on the separatrix (m = 1)"
-        return {"substitution": self.found.name, "degree": self.found.degree, "motion": kind,
-                "interval": [float(x) for x in mo.interval], "m": float(mo.m), "kappa": float(mo.kappa),
-                "period": float(self.period) if np.isfinite(float(self.period)) else None}
+        elementary = getattr(mo, "elementary", False)
+        out = {"substitution": self.found.name, "degree": self.found.degree, "motion": kind,
+               "interval": [float(x) for x in mo.interval], "m": None if elementary else float(mo.m),
+               "kappa": None if elementary and mo.form == "polynomial" else float(mo.kappa),
+               "period": float(self.period) if np.isfinite(float(self.period)) else None}
+        if mo.escape_times is not None:
+            out["escape_times"] = list(mo.escape_times)
+        return out
 
     def summary(self, name: str) -> float:
         """``<q>_min``, ``<q>_max`` (the turning points of q; the fold's mirror image for a libration through a
@@ -298,9 +311,11 @@ class ClosedMotion:
         if name.endswith("_per_period"):
             integral, _, _ = self.rate(name[: -len("_per_period")])
             return float(integral.advance * (2 if self.kind == "libration through a fold" else 1))
-        if self.kind in ("rotation", "unbounded"):
+        if self.kind == "rotation" or self.kind.startswith("unbounded: q"):
             raise OutOfReach(f"{name}: q is not bounded on this motion ({self.kind})")
         a, b = (float(x) for x in self.motion.interval)
+        if self.kind.startswith("unbounded"):
+            return self._unbounded_summary(name, a, b)
         if self.kind == "libration through a fold":
             other = a if self.end == "b" else b
             reach = abs(float(self.shape.inverse(np.array(other), self.q0)) - self.q_fold)
@@ -310,6 +325,22 @@ class ClosedMotion:
         else:
             ends = tuple(sorted(float(self.shape.inverse(np.array(x), self.q0)) for x in (a, b)))
         return ends[0] if name.endswith("_min") else ends[1]
+
+    def _unbounded_summary(self, name: str, a: float, b: float) -> float:
+        """``<q>_min`` / ``<q>_max`` of a motion from the turning point a (a root of P; none where a = −∞) out to
+        u = ±∞: the turning point's q is the bound on its side (reached in the motion's past or future, at
+        u̇ = 0), and the other side has none."""
+        if not np.isfinite(a) or a == b:
+            raise OutOfReach(f"{name}: q is not bounded on this motion ({self.kind}; u has no turning point)")
+        q_turn = float(self.shape.inverse(np.array(a), self.q0))
+        # q moves away from q_turn on the side where u does: the sign of (b − a)·g'(q)
+        with np.errstate(all="ignore"):
+            side = np.sign((b - a) * float(self.shape.dg(np.array(q_turn))))
+        bounded = "_min" if side > 0 else "_max"
+        if not name.endswith(bounded):
+            raise OutOfReach(f"{name}: q is not bounded on this side ({self.kind}, from its turning point "
+                             f"{self.remaining} = {q_turn:.12g})")
+        return q_turn
 
     # --- evaluation ---------------------------------------------------------------------------------
 
@@ -357,6 +388,12 @@ class ClosedMotion:
     def columns(self, t: np.ndarray, wanted: Sequence[str]) -> dict:
         """The requested state columns (q, q_dot of every coordinate) at the times ``t``."""
         t = np.asarray(t, dtype=float)
+        escape = self.motion.escape_times
+        if escape is not None and t.size and not (escape[0] < np.min(t) and np.max(t) < escape[1]):
+            # u = ±∞ at the escape: past it the formula continues through ∞ (u̇² = P(u) still holds, the sign of u̇
+            # turned), which is no motion — refused, as a blow-up is for integration
+            raise OutOfReach(f"{self.remaining} reaches infinity at t = {escape[1]:.12g} (and, backwards, at "
+                             f"{escape[0]:.12g}): u̇² = P(u) blows up in finite time, the closed form stops there")
         jac = self.motion.jacobi(t)
         out: dict = {}
         r = self.remaining
@@ -413,13 +450,17 @@ class ClosedMotion:
         worst: dict = {}
         with mp.workdps(DPS):
             for i, ti in enumerate(ts):
-                v = mo.kappa * mp.mpf(float(ti)) + mo.v_start
-                sn, cn, dn = (mp.ellipfun(f, v, m=mo.m) for f in ("sn", "cn", "dn"))
-                u = mo.mp_u(sn, cn, dn)
+                if getattr(mo, "elementary", False):  # polynomial or exponential in t: no Jacobi functions
+                    v = sn = cn = dn = None
+                    u, u_dot = mo.mp_state(float(ti))
+                else:
+                    v = mo.kappa * mp.mpf(float(ti)) + mo.v_start
+                    sn, cn, dn = (mp.ellipfun(f, v, m=mo.m) for f in ("sn", "cn", "dn"))
+                    u, u_dot = mo.mp_u(sn, cn, dn), None
                 ref: dict = {}
                 r = self.remaining
                 if r in got:
-                    ref[r], ref[r + "_dot"] = self._q_mp(v, sn, cn, dn, u, float(got[r][i]))
+                    ref[r], ref[r + "_dot"] = self._q_mp(v, sn, cn, dn, u, float(got[r][i]), u_dot)
                 for c in self.cyclic:
                     if c in got:
                         integral, _, _ = self.rate(c)
@@ -443,20 +484,20 @@ class ClosedMotion:
         qs = next(iter(g.free_symbols))
         return sp.lambdify(qs, g, "mpmath"), sp.lambdify(qs, sp.diff(g, qs), "mpmath")
 
-    def _q_mp(self, v, sn, cn, dn, u, q_double: float) -> tuple:
+    def _q_mp(self, v, sn, cn, dn, u, q_double: float, u_dot: Any = None) -> tuple:
         mp = _mp()
         from ...solvers.quadrature_motion import _am_mp
 
         mo, shape = self.motion, self.shape
         kap = mo.kappa
-        A, B, C, D = mo.mobius
-        det = B * C - A * D
         if self.kind == "steady":
             return mp.mpf(self.q0), mp.mpf(0)
         if self.kind == "rotation":
             return (mp.mpf(self.q_fold) + self.S * shape.scale * _am_mp(v, mo.m),
                     self.S * shape.scale * kap * dn)
         if self.kind == "libration through a fold":
+            A, B, C, D = mo.mobius
+            det = B * C - A * D
             den = mo.mp_den(sn, cn)
             if self.end == "a":
                 rho = mp.sqrt(abs(det / C) / abs(den))
@@ -488,7 +529,7 @@ class ClosedMotion:
         q = mp.mpf(q_double)
         for _ in range(2):
             q = q - (gl(q) - u) / dgl(q)
-        return q, mo.mp_u_dot(sn, cn, dn) / dgl(q)
+        return q, (mo.mp_u_dot(sn, cn, dn) if u_dot is None else u_dot) / dgl(q)
 
 
 def closed_orbit(system: Any, along: str, parameters: dict, initial: dict) -> ClosedMotion:

@@ -468,8 +468,13 @@ class LagrangianSystem(System):
         if "_reduced_model" not in self.__dict__:
             from ...core.quadrature import without_time_gauge
 
+            from ...core.quadrature import one_free_coordinate
+
             model = self.equations.lagrangian_model
-            self.__dict__["_reduced_model"] = without_time_gauge(model)[0] if self.definition.uses_time else model
+            model = without_time_gauge(model)[0] if self.definition.uses_time else model
+            # a single coordinate that is itself cyclic (a free rotor, a free particle): nothing is left to Routh-reduce
+            # to, so it is the coordinate the quadrature solves (u̇² = P constant)
+            self.__dict__["_reduced_model"] = one_free_coordinate(model)
         return self.__dict__["_reduced_model"]
 
     def cyclic_rates(self) -> dict:
@@ -498,7 +503,7 @@ class LagrangianSystem(System):
         out = {}
         for n in names:
             if n == "period" and (base.kind == "steady" or base.kind.startswith("unbounded")):
-                out[n] = (None, f"a {base.kind} motion: no period")
+                out[n] = (None, f"no period: the motion is {base.kind}")
                 continue
             if n == "period" and base.motion.asymptotic:
                 out[n] = (None, f"m = 1 ({base.kind}): the motion takes infinitely long and does not return")

@@ -1,0 +1,351 @@
+"""The motions of u̇² = P(u) that do not oscillate (issue 16): degree ≤ 1, the quadratic with no real root, and
+the cubic with one real root — closed forms in t that are polynomial, exponential or Jacobian.
+
+The periodic and asymptotic motions are :mod:`mechderive.solvers.quadrature_motion`'s; it hands these here.
+Each form below is derived from ü = P'(u)/2 (the derivative of u̇² = P(u) divided by 2u̇) and checked in the tests
+against DOP853 on that equation:
+
+* **deg P ≤ 1**, P = c1 u + c0: ü = c1/2, so u = u0 + u̇0 t + (c1/4) t² with u̇0 = ±√P(u0) — uniform motion
+  (c1 = 0: a free particle, a free rotor) or uniformly accelerated (a body falling under uniform gravity).  From a
+  start on the root r = −c0/c1 (u̇0 = 0) the motion leaves it on the side where P > 0, i.e. the sign of c1.  The
+  root is the one turning point (reached at t_r = −2u̇0/c1, in the past or the future); no period.  The form has
+  no division by c1, so c1 → 0 loses nothing (only the turning point, −c0/c1, recedes to ∞).
+* **a quadratic with no real root**, P = c2((u − α)² + β²), c2 > 0: ü = c2 (u − α), so
+
+      u = α + β sinh(κ t + v_s) = α + p₊ e^{κt} + p₋ e^{−κt},   κ = √c2,   p± = ((u0 − α) ± u̇0/κ)/2,
+
+  (p± = ±β e^{±v_s}/2); u passes through every value, with no turning point.  p₊p₋ = −β²/4, so the smaller of
+  the two is taken as −β²/(4·the larger) (no cancellation when β ≪ |u0 − α|); a pair so near the real axis that
+  β² is lost at the working precision (a nearly double root) is refused.
+* **a cubic with one real root r** and the complex pair α ± iβ, lead c3: P > 0 on the side σ = sign c3 of r,
+  where u runs from r out to ∞ and reaches it in a finite time (Byrd & Friedman 239.00 for σ = +1, and its mirror
+  u → −u; derived in the docstring of :func:`_cubic_complex_pair`):
+
+      u = r + σ A (1 − cn v)/(1 + cn v),   v = κ t + v_s,   A² = (r − α)² + β²,
+      m = 1/2 − σ (r − α)/(2A),   κ² = |c3| A,
+
+  the Möbius form (A + B cn)/(C + D cn) of :class:`~mechderive.solvers.quadrature_motion.EllipticMotionCn`.  u
+  is infinite at cn = −1, v = ±2K: the motion exists for (−2K − v_s)/κ < t < (2K − v_s)/κ
+  (:attr:`~mechderive.solvers.quadrature_motion.EllipticMotion.escape_times`), and the closed form refuses times
+  beyond, as for the cubic's real-root branch u ≥ r3.
+
+Not covered here: a quadratic with a double real root (u − α ∝ e^{±κt}), and the cyclic rates on these forms.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .quadrature_motion import DPS, EllipticMotionCn, NotElliptic, _mp, _split_mp
+
+__all__ = ["ElementaryMotion", "EllipticMotionCubicPair", "open_motion"]
+
+
+@dataclass
+class ElementaryMotion:
+    """u(t) in elementary functions of t: ``form`` "polynomial" (u = u0 + s t + a t², ``constants`` = (u0, s, a)) or
+    "exponential" (u = α + p₊ e^{κt} + p₋ e^{−κt}, ``constants`` = (α, p₊, p₋)); mpmath numbers at 40 digits.
+
+    ``interval`` = (turning point, ±∞) when there is one (the root of a linear P; −∞ or +∞ as the side the
+    motion lies on), else (−∞, ∞).  The protocol of :class:`~mechderive.solvers.quadrature_motion.EllipticMotion`
+    that :mod:`mechderive.systems.lagrangian.closed` uses, with t itself as the "phase": :meth:`jacobi` returns
+    (t,), :meth:`mp_state` u and u̇ at the caller's precision (the estimate's reference).
+    """
+
+    coefficients: tuple
+    degree: int
+    form: str
+    constants: tuple
+    interval: tuple
+    #: the rate of the exponential form (√c2), the time scale's inverse; 1 for the polynomial form
+    kappa: Any
+    steady: bool = False
+    _f: dict = field(default_factory=dict, repr=False)
+
+    #: no Jacobi functions: the closed form's estimate and folds take the elementary path
+    elementary = True
+    asymptotic = False
+    escape_times = None
+    m = None
+
+    @property
+    def u_period(self) -> Any:
+        return _mp().inf
+
+    @property
+    def turning_point(self) -> Any:
+        """The root of P the motion turns at (None if it has none)."""
+        a, b = self.interval
+        mp = _mp()
+        return None if mp.isinf(a) else a
+
+    def _doubles(self) -> tuple:
+        if "c" not in self._f:
+            with _mp().workdps(DPS):
+                self._f["c"] = tuple(float(x) for x in self.constants)
+                self._f["k"] = _split_mp(self.kappa)
+        return self._f["c"]
+
+    def jacobi(self, t: Any) -> tuple:
+        return (np.asarray(t, dtype=float),)
+
+    def _exp(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(e^{κt}, e^{−κt}) with κt in double-double (κ's rounding is not multiplied by t)."""
+        from ..special._doubledouble import two_prod
+
+        self._doubles()
+        k_hi, k_lo = self._f["k"]
+        p, pe = two_prod(np.broadcast_to(k_hi, t.shape).astype(float), t)
+        small = pe + k_lo * t
+        with np.errstate(over="ignore"):
+            return np.exp(p) * (1.0 + small), np.exp(-p) * (1.0 - small)
+
+    def u(self, t: Any, jac: tuple | None = None) -> np.ndarray:
+        t = np.asarray(t, dtype=float) if jac is None else jac[0]
+        c = self._doubles()
+        if self.form == "polynomial":
+            return c[0] + t * (c[1] + c[2] * t)
+        ep, em = self._exp(t)
+        return c[0] + (c[1] * ep + c[2] * em)
+
+    def u_dot(self, t: Any, jac: tuple | None = None) -> np.ndarray:
+        t = np.asarray(t, dtype=float) if jac is None else jac[0]
+        c = self._doubles()
+        if self.form == "polynomial":
+            return c[1] + 2.0 * c[2] * t
+        ep, em = self._exp(t)
+        return self._f["k"][0] * (c[1] * ep - c[2] * em)
+
+    def minus(self, point: Any, t: Any, jac: tuple | None = None) -> np.ndarray:
+        """u(t) − ``point``: from u0 − point at the working precision (a rate's poles: none are offered here)."""
+        t = np.asarray(t, dtype=float) if jac is None else jac[0]
+        mp = _mp()
+        with mp.workdps(DPS):
+            shift = float(self.constants[0] - point)
+        return shift + (self.u(t, (t,)) - self._doubles()[0])
+
+    def signed_root(self, end: str, t: Any, jac: tuple | None = None) -> tuple:
+        raise NotElliptic("expected no fold of the substitution on a motion without an elliptic closed form "
+                          "(a fold at the turning point of an unbounded motion is not covered)")
+
+    def mp_state(self, t: Any) -> tuple:
+        """(u, u̇) at t from the 40-digit constants, at the caller's precision (mpmath)."""
+        mp = _mp()
+        t = mp.mpf(t)
+        c0, c1, c2 = self.constants
+        if self.form == "polynomial":
+            return c0 + t * (c1 + c2 * t), c1 + 2 * c2 * t
+        ep, em = mp.exp(self.kappa * t), mp.exp(-self.kappa * t)
+        return c0 + c1 * ep + c2 * em, self.kappa * (c1 * ep - c2 * em)
+
+    def u_mp(self, t) -> Any:
+        mp = _mp()
+        with mp.workdps(DPS):
+            return self.mp_state(t)[0]
+
+
+class EllipticMotionCubicPair(EllipticMotionCn):
+    """u = r + σA(1 − cn v)/(1 + cn v) for a cubic with one real root (see the module docstring): the Möbius form
+    of :class:`EllipticMotionCn` with (A + B cn)/(C + D cn) = ((r + σA) + (r − σA) cn)/(1 + cn), evaluated in the
+    forms that keep their digits at both ends: σ(u − r) = A sn²/(1 + cn)² while cn ≥ 0 (near the root), and
+    A (1 − cn)²/sn² while cn < 0 (near the escape at cn = −1, where 1 + cn would cancel)."""
+
+    sigma: float = 1.0
+
+    def _parts(self) -> tuple[float, float]:
+        A, B, C, D, det = self._mob()
+        return (A + B) / 2.0, (A - B) / 2.0  # r and σA
+
+    def u(self, t: Any, jac: tuple | None = None) -> np.ndarray:
+        sn, cn, dn, _, _ = self.jacobi(t) if jac is None else jac
+        r, sa = self._parts()
+        with np.errstate(all="ignore"):
+            return r + sa * np.where(cn >= 0, sn * sn / (1.0 + cn) ** 2, (1.0 - cn) ** 2 / (sn * sn))
+
+    def u_dot(self, t: Any, jac: tuple | None = None) -> np.ndarray:
+        """u̇ = 2σAκ sn dn/(1 + cn)² (d cn/dv = −sn dn), with 1/(1 + cn)² = (1 − cn)²/sn⁴ while cn < 0."""
+        sn, cn, dn, _, _ = self.jacobi(t) if jac is None else jac
+        r, sa = self._parts()
+        kap = float(self.kappa)
+        with np.errstate(all="ignore"):
+            return 2.0 * sa * kap * dn * np.where(cn >= 0, sn / (1.0 + cn) ** 2, (1.0 - cn) ** 2 / sn**3)
+
+    def minus(self, point: Any, t: Any, jac: tuple | None = None) -> np.ndarray:
+        mp = _mp()
+        A, B, C, D = self.mobius
+        with mp.workdps(DPS):
+            shift = float((A + B) / 2 - point)
+        r, _ = self._parts()
+        return shift + (self.u(t, jac) - r)
+
+    def mp_u(self, sn, cn, dn) -> Any:
+        A, B, C, D = self.mobius
+        r, sa = (A + B) / 2, (A - B) / 2
+        return r + sa * (sn * sn / (1 + cn) ** 2 if cn >= 0 else (1 - cn) ** 2 / (sn * sn))
+
+    def mp_u_dot(self, sn, cn, dn) -> Any:
+        A, B, C, D = self.mobius
+        sa = (A - B) / 2
+        return 2 * sa * self.kappa * dn * (sn / (1 + cn) ** 2 if cn >= 0 else (1 - cn) ** 2 / sn**3)
+
+    @property
+    def escape_times(self) -> tuple[float, float]:
+        """(t₋, t₊): u is infinite at v = ±2K (cn = −1), before and after the start."""
+        mp = _mp()
+        with mp.workdps(DPS):
+            return float((-2 * self.K - self.v_start) / self.kappa), float((2 * self.K - self.v_start) / self.kappa)
+
+    def u_mp(self, t) -> Any:
+        mp = _mp()
+        with mp.workdps(DPS):
+            v = self.kappa * mp.mpf(t) + self.v_start
+            return self.mp_u(*(mp.ellipfun(f, v, m=self.m) for f in ("sn", "cn", "dn")))
+
+
+def open_motion(c: list, roots: list, u0: Any, direction: int) -> Any:
+    """The motion of u̇² = P(u) (``c`` P's coefficients, highest first, leading one nonzero unless P ≡ 0; ``roots``
+    its real roots) for the configurations of the module docstring, at the caller's working precision; raises
+    :class:`NotElliptic` for the others."""
+    mp = _mp()
+    degree = len(c) - 1
+    if degree <= 1:
+        return _polynomial(c, u0, direction)
+    if degree == 2 and not roots:
+        if c[0] < 0:
+            raise NotElliptic(f"expected u̇² = P(u0) ≥ 0, got a quadratic P < 0 everywhere (u0 = {mp.nstr(u0, 10)})")
+        return _exponential(c, u0, direction)
+    if degree == 3 and len(roots) == 1:
+        return _cubic_complex_pair(c, roots[0], u0, direction)
+    raise NotElliptic(f"expected a configuration of degree ≤ 1, a quadratic with no real root or a cubic with one, "
+                      f"got degree {degree} with {len(roots)} real roots")
+
+
+def _speed(c: list, u0: Any, direction: int) -> Any:
+    """u̇0 = direction·√P(u0) (P(u0) < 0 within the rounding of doubles taken as exact is a start on a root)."""
+    mp = _mp()
+    value = mp.polyval(c, u0)
+    scale = sum(abs(x) * abs(u0) ** (len(c) - 1 - i) for i, x in enumerate(c)) + mp.mpf(10) ** -300
+    if value < -mp.mpf(2) ** -40 * scale:
+        raise NotElliptic(f"expected u̇² = P(u0) ≥ 0, got P(u0) = {mp.nstr(value, 5)} at u0 = {mp.nstr(u0, 10)}")
+    return direction * mp.sqrt(max(value, mp.mpf(0)))
+
+
+def _polynomial(c: list, u0: Any, direction: int) -> ElementaryMotion:
+    """P = c1 u + c0 (c1 = 0 allowed): u = u0 + u̇0 t + (c1/4) t² (ü = P'/2 = c1/2)."""
+    mp = _mp()
+    c = [mp.mpf(0)] * (2 - len(c)) + list(c)
+    c1, c0 = c
+    if c1 == 0:
+        if c0 < 0:
+            raise NotElliptic(f"expected u̇² = P ≥ 0, got the constant P = {mp.nstr(c0, 5)} < 0")
+        speed = direction * mp.sqrt(c0)
+        interval = (-mp.inf, mp.inf)
+        if direction == 0 and c0 > 0:
+            raise NotElliptic("expected a direction for a uniform motion (u̇0 ≠ 0), got none")
+        steady = c0 == 0
+        if steady:  # P ≡ 0: at rest, u ≡ u0
+            speed = mp.mpf(0)
+            interval = (u0, u0)
+        return ElementaryMotion(tuple(c), 1 if c1 else 0, "polynomial", (u0, speed, mp.mpf(0)), interval, mp.mpf(1),
+                                steady=steady)
+    speed = _speed(c, u0, direction)
+    if direction == 0:
+        # a start on the root: u̇ grows as (c1/2) t, towards the side where P > 0 (that of c1) — the form covers it
+        speed = mp.mpf(0)
+    root = -c0 / c1
+    interval = (root, mp.inf if c1 > 0 else -mp.inf)
+    return ElementaryMotion(tuple(c), 1, "polynomial", (u0, speed, c1 / 4), interval, mp.mpf(1))
+
+
+def _exponential(c: list, u0: Any, direction: int) -> ElementaryMotion:
+    """P = c2((u − α)² + β²), c2 > 0: u = α + p₊e^{κt} + p₋e^{−κt} (see the module docstring)."""
+    mp = _mp()
+    c2, c1, c0 = c
+    alpha = -c1 / (2 * c2)
+    beta_sq = c0 / c2 - alpha**2
+    # β² from c0/c2 − α² cancels to ~10^-DPS of α²: a pair nearer the real axis than that is not resolved (it may be
+    # a double root, u − α ∝ e^{±κt}, another motion)
+    if not beta_sq > mp.mpf(10) ** (-DPS + 10) * (alpha**2 + abs(c0 / c2)):
+        raise NotElliptic(f"expected a complex pair of roots resolved at {DPS} digits, got α ± iβ with β² = "
+                          f"{mp.nstr(beta_sq, 3)} beside α = {mp.nstr(alpha, 10)}: a nearly double root, not covered")
+    if direction == 0:
+        raise NotElliptic("expected u̇0 ≠ 0 where P has no real root (u̇² = P > 0 everywhere), got 0")
+    kappa = mp.sqrt(c2)
+    x0 = u0 - alpha
+    # u̇0/κ = ±√(x0² + β²): the larger of p± = (x0 ± u̇0/κ)/2 directly, the other from p₊p₋ = −β²/4
+    half = direction * mp.sqrt(x0**2 + beta_sq)
+    if (x0 >= 0) == (half >= 0):
+        big = (x0 + half) / 2
+        p_plus, p_minus = big, -beta_sq / (4 * big)
+    else:
+        big = (x0 - half) / 2
+        p_plus, p_minus = -beta_sq / (4 * big), big
+    return ElementaryMotion(tuple(c), 2, "exponential", (alpha, p_plus, p_minus), (-mp.inf, mp.inf), kappa)
+
+
+def _cubic_complex_pair(c: list, r: Any, u0: Any, direction: int) -> EllipticMotionCubicPair:
+    """P = c3 (u − r)((u − α)² + β²), the motion on the side σ = sign c3 of r.
+
+    Derivation (x = σ(u − r) ≥ 0, s = σ(r − α), A² = s² + β²; the mirror u → −u makes σ = −1 the case σ = +1):
+    with cn = (A − x)/(A + x), i.e. x = A(1 − cn)/(1 + cn) = A sn²/(1 + cn)²,
+
+        (u − α)² + β² = x² + 2 s x + A² = 2A² [(1 + s/A) + (1 − s/A) cn²]/(1 + cn)² = 4A² dn²/(1 + cn)²
+
+    exactly when m/(1 − m) = (1 − s/A)/(1 + s/A), m = (1 − s/A)/2; and dx/dv = 2A sn dn/(1 + cn)², so that
+    (dx/dv)² = P(u)/(|c3| A): u̇² = P(u) with v = κ t + v_s, κ² = |c3| A.  Checked numerically below (κ² at two
+    values of cn) and in the tests against DOP853.
+    """
+    mp = _mp()
+    sigma = 1 if c[0] > 0 else -1
+    # the pair from P/(u − r): synthetic division, then the quadratic's α and β²
+    q2 = c[0]
+    q1 = c[1] + r * q2
+    q0 = c[2] + r * q1
+    alpha = -q1 / (2 * q2)
+    beta_sq = q0 / q2 - alpha**2
+    if not beta_sq > mp.mpf(10) ** (-DPS + 10) * (alpha**2 + abs(q0 / q2)):
+        raise NotElliptic(f"expected a complex pair of roots resolved at {DPS} digits, got α ± iβ with β² = "
+                          f"{mp.nstr(beta_sq, 3)} beside α = {mp.nstr(alpha, 10)}: a nearly double root, not covered")
+    x0 = sigma * (u0 - r)
+    if x0 < -mp.mpf(2) ** -40 * (1 + abs(u0)):
+        raise NotElliptic(f"expected u̇² = P(u0) ≥ 0, got u0 = {mp.nstr(u0, 10)} on the side of the root "
+                          f"{mp.nstr(r, 10)} where P < 0")
+    x0 = max(x0, mp.mpf(0))
+    s = sigma * (r - alpha)
+    A = mp.sqrt(s**2 + beta_sq)
+    # m and 1 − m without cancellation: (A ∓ s)/(2A), the small one as β²/(2A(A ± s))
+    if s >= 0:
+        m, m1 = beta_sq / (2 * A * (A + s)), (A + s) / (2 * A)
+    else:
+        m, m1 = (A - s) / (2 * A), beta_sq / (2 * A * (A - s))
+    # the pair near the real axis on the motion's side: u passes a near-double root slowly (m → 1); the 30-digit
+    # reference would keep too few digits of 1 − m to measure the estimate
+    if m1 < mp.mpf(10) ** -15:
+        raise NotElliptic(f"expected the complex pair away from the motion, got 1 − m = {mp.nstr(m1, 3)} (β = "
+                          f"{mp.nstr(mp.sqrt(beta_sq), 3)}): a nearly double root the motion passes, not covered")
+    k2 = abs(c[0]) * A
+    mob = (r + sigma * A, r - sigma * A, mp.mpf(1), mp.mpf(1))
+    P = lambda x: mp.polyval(c, x)  # noqa: E731
+
+    def kappa_sq(cn):
+        sn2 = 1 - cn * cn
+        du = 2 * A / (1 + cn) ** 2  # |du/dv| / (sn dn)
+        return P(r + sigma * A * (1 - cn) / (1 + cn)) / (du**2 * sn2 * (m1 + m * cn * cn))
+
+    for cn in (mp.mpf(1) / 3, -mp.mpf(2) / 5):
+        if abs(kappa_sq(cn) - k2) > mp.mpf(10) ** -8 * abs(k2):
+            raise NotElliptic(f"expected the cn form to fit the cubic (κ² constant), got {mp.nstr(k2, 8)} and "
+                              f"{mp.nstr(kappa_sq(cn), 8)}: an inconsistent root configuration")
+    kappa = mp.sqrt(k2)
+    K = mp.ellipk(m)
+    # v0 = F(φ0|m), cn v0 = cos φ0 = (A − x0)/(A + x0): φ0 = 2 asin √(x0/(A + x0)) (no cancellation at the root)
+    v0 = mp.ellipf(2 * mp.asin(mp.sqrt(x0 / (A + x0))), m)
+    # σ du/dv ≥ 0 on (0, 2K): u moves away from r as v grows on the side σ
+    v_start = mp.mpf(0) if direction == 0 else (v0 if direction * sigma > 0 else -v0)
+    motion = EllipticMotionCubicPair(tuple(c), (r, sigma * mp.inf), (r, sigma * mp.inf, mp.mpf("nan"),
+                                     mp.mpf("nan")), mob, m, m1, kappa, v_start, K, mp.inf, 3)
+    motion.sigma = float(sigma)
+    return motion
