@@ -134,8 +134,6 @@ def test_configurations_not_covered_are_refused_with_the_reason():
         elliptic_motion(-np.poly((0.0, 1.0, 1.0)), 0.5, 1)  # P < 0 there
     with pytest.raises(NotElliptic, match="degree ≤ 4"):
         elliptic_motion([1.0, 0.0, 0.0, 0.0, 0.0, 2.0], 0.0, 1)
-    with pytest.raises(NotElliptic, match="complex roots"):
-        elliptic_motion([1.0, 0.0, 1.0], 2.0, 1)  # u̇² = u² + 1: no real root, u passes through every value
     # roots 1e-25 apart, resolved by the 40-digit roots: a periodic motion of period ~ln(1e25)/κ, not a separatrix
     with pytest.raises(NotElliptic, match="1.0e-25 apart"):
         elliptic_motion(["-1", "-1.0000000000000000000000001", "1.0", "1.0000000000000000000000001"], 0.3, 1)
@@ -235,6 +233,60 @@ def test_free_rotor_turns_uniformly():
     assert result.report["summary"]["period"] is None
 
 
+# --- a quadratic with no real root: u = α + β sinh(κt + v_s) ---------------------------------------------------
+
+NO_TURNING_POINT = [
+    # (name, c2, α, β, u0, direction): P = c2((u − α)² + β²)
+    ("upwards from below α", 1.0, 0.5, 1.5, -0.3, 1),
+    ("downwards from below α", 1.0, 0.5, 1.5, -0.3, -1),
+    ("downwards from above α", 4.0, -1.0, 0.7, 2.0, -1),
+    ("a narrow pair, β ≪ |u0 − α|", 2.0, 1.0, 1e-6, 3.0, -1),
+]
+
+
+@pytest.mark.parametrize("name, c2, alpha, beta, u0, direction", NO_TURNING_POINT, ids=[c[0] for c in NO_TURNING_POINT])
+def test_u_of_t_for_a_quadratic_with_no_real_root(name, c2, alpha, beta, u0, direction):
+    coeffs = [c2, -2 * c2 * alpha, c2 * (alpha**2 + beta**2)]
+    motion = elliptic_motion(coeffs, u0, direction)
+    t = np.linspace(0.0, 2.5 / np.sqrt(c2), 251)  # to e^{2.5} ≈ 12 times the start's distance from α
+    ref, _ = _ode_reference(coeffs, u0, direction, t)
+    # DOP853 at rtol 1e-13 on the linear ü = c2(u − α): its global error, measured ≲ 3e-13 relative here
+    assert np.max(np.abs(motion.u(t) - ref) / (1 + np.abs(ref))) <= 1e-11
+    # by hand: u = α + dβ sinh(κt + asinh(d(u0 − α)/β)), κ = √c2, d the direction (u̇ = dκβ cosh(…) has its sign);
+    # the constants are rounded once from c2, α, β given as doubles, and the hand formula at 30 digits
+    from mpmath import asinh, mp, mpf, sinh, sqrt
+    with mp.workdps(30):
+        a, b, k = mpf(alpha), mpf(beta), sqrt(mpf(c2))
+        hand = np.array([float(a + direction * b * sinh(k * mpf(x) + asinh(direction * (mpf(u0) - a) / b)))
+                         for x in t])
+    # coefficients passed as doubles move α, β by ~1e-16 relative: a few ulp of the largest |u|
+    assert np.max(np.abs(motion.u(t) - hand)) <= 1e-14 * (1 + np.max(np.abs(hand)))
+    assert motion.turning_point is None and not np.isfinite(float(motion.u_period)) and motion.escape_times is None
+
+
+def test_a_complex_pair_too_near_the_real_axis_is_refused():
+    # β² = 1e-36 beside α = 1: the 40-digit constants cannot tell it from a double root (another motion)
+    with pytest.raises(NotElliptic, match="nearly double root"):
+        elliptic_motion(["1", "-2", "1.000000000000000000000000000000000001"], 3.0, 1)
+    with pytest.raises(NotElliptic, match="P < 0 everywhere"):
+        elliptic_motion([-1.0, 0.0, -1.0], 0.0, 1)
+
+
+def test_over_the_top_of_an_inverted_parabola():
+    """L = ẋ²/2 + k x²/2 with E > 0 and x0 < 0 < ẋ0: x passes the top x = 0 and runs off; by hand
+    x = x0 cosh ωt + (ẋ0/ω) sinh ωt, ω = √k."""
+    result = run_scene(_scene(["x"], "x_dot**2/2 + k*x**2/2", dict(k=4.0), dict(x=-0.5, x_dot=1.5), t_end=3.0,
+                              samples=301, summary=["x_min", "period"]))
+    assert result.report["method"] == "exact", result.report.get("note")
+    assert result.report["details"]["closed_form"]["motion"] == "unbounded: no turning point"
+    t = np.linspace(0.0, 3.0, 301)
+    hand = -0.5 * np.cosh(2 * t) + 0.75 * np.sinh(2 * t)
+    # x grows to ~100: cosh and sinh each round to an ulp of ~100, the closed form's e^{±κt} likewise
+    assert np.max(np.abs(result.columns["x"] - hand)) <= 1e-14 * np.max(np.abs(hand))
+    assert result.report["error_estimate"] <= 1e-13
+    assert result.report["summary"]["x_min"] is None and "no turning point" in result.report["summary_error"]["x_min"]
+
+
 # m = 1: from a turning point towards a double root of P (a separatrix), or to ∞ where the quadratic's P has its
 # double branch point (hyperbolic escape, u = r + (r − r') sinh²(κt + v_s)); never returning
 ASYMPTOTIC = [
@@ -307,6 +359,9 @@ SYSTEMS = [
     # degree ≤ 1: a projectile's height (uniform gravity) and a free rotor (its only coordinate cyclic)
     ("body thrown up under uniform gravity", ["z"], "m*z_dot**2/2 - m*g*z", dict(m=1.0, g=9.81), dict(z=1.0, z_dot=20.0),
      "unbounded: uniformly accelerated"),
+    # no turning point: over the top of an inverted parabola
+    ("over an inverted parabola", ["x"], "x_dot**2/2 + k*x**2/2", dict(k=1.0), dict(x=-0.5, x_dot=1.0),
+     "unbounded: no turning point"),
     ("free rotor", ["theta"], "J*theta_dot**2/2", dict(J=0.3), dict(theta=0.5, theta_dot=2.5), "unbounded: uniform motion"),
 ]
 

@@ -38,12 +38,13 @@ x = sech t), or the unbounded quadratic P = c0 (u − r1)(u − r2), c0 > 0, who
 is not reduced (K = ∞).
 
 Degree ≤ 1 — uniform motion (a free particle, a free rotor) and uniformly accelerated motion (a body under
-uniform gravity), u = u0 + u̇0 t + (c1/4) t² — is solved in :mod:`mechderive.solvers.quadrature_open`, to which
-:func:`elliptic_motion` hands it.
+uniform gravity), u = u0 + u̇0 t + (c1/4) t² — and the quadratic with no real root, u = α + β sinh(κt + v_s)
+(no turning point: over the top of an inverted parabola) are solved in :mod:`mechderive.solvers.quadrature_open`,
+to which :func:`elliptic_motion` hands them.
 
 Not covered (the caller integrates instead; :class:`NotElliptic` says why): a quartic with only complex
-roots or escaping through infinity, a cubic with one real root, a quadratic with no real root (no turning
-point), an unstable equilibrium (a start on a double root with P'' > 0), the cyclic rates at
+roots or escaping through infinity, a cubic with one real root, a quadratic with a double root or a complex pair
+too near the real axis to resolve at 40 digits, an unstable equilibrium (a start on a double root with P'' > 0), the cyclic rates at
 m = 1, and rates with complex poles, poles on the motion, or a polynomial part of degree > 1 in w.
 """
 
@@ -416,6 +417,10 @@ def _elliptic_motion(coefficients: Sequence, u0: Any, direction: int, dps: int) 
             return open_motion(c, [], u0, direction)
         P = lambda x: mp.polyval(c, x)  # noqa: E731
         roots = _real_roots(c)
+        if degree == 2 and not roots:  # no turning point: u = α + β sinh(κt + v_s) (quadrature_open)
+            from .quadrature_open import open_motion
+
+            return open_motion(c, roots, u0, direction)
         if degree == 4 and len(roots) == 2:
             return _complex_pair_quartic(c, roots, u0, direction)
         if degree == 4 and len(roots) < 4 or degree == 3 and len(roots) < 3 or degree == 2 and len(roots) < 2:
