@@ -287,6 +287,106 @@ def test_over_the_top_of_an_inverted_parabola():
     assert result.report["summary"]["x_min"] is None and "no turning point" in result.report["summary_error"]["x_min"]
 
 
+# --- a cubic with one real root: u = r + σA(1 − cn)/(1 + cn), out to ∞ in finite time -----------------------------
+
+ONE_REAL_ROOT = [
+    # (name, lead, r, α ± iβ, u0, direction): P = lead (u − r)((u − α)² + β²), the motion on the side of sign(lead)
+    ("right of r, outwards", 1.0, 0.5, complex(-1, 1.5), 1.0, 1),
+    ("right of r, inwards first", 1.0, 0.5, complex(-1, 1.5), 1.0, -1),
+    ("right of r, the pair on the motion's side", 2.0, 0.5, complex(2, 1.0), 1.0, 1),
+    ("left of r (lead < 0)", -1.0, 0.5, complex(-1, 1.5), 0.0, 1),
+    ("left of r, from the root", -1.0, 0.5, complex(-1, 1.5), 0.5, 0),
+    ("left of r, the pair on the motion's side", -1.0, 0.5, complex(1, 0.5), -0.5, 1),
+]
+
+
+def _cubic(lead, r, pair):
+    return list(lead * np.real(np.poly([r, pair, pair.conjugate()])))
+
+
+@pytest.mark.parametrize("name, lead, r, pair, u0, direction", ONE_REAL_ROOT, ids=[c[0] for c in ONE_REAL_ROOT])
+def test_u_of_t_for_a_cubic_with_one_real_root(name, lead, r, pair, u0, direction):
+    coeffs = _cubic(lead, r, pair)
+    motion = elliptic_motion(coeffs, u0, direction)
+    before, after = motion.escape_times
+    assert before < 0 < after
+    t = np.linspace(0.0, 0.95 * after, 201)  # u grows as 1/(t₊ − t)²: to ~400 |u0| here
+    ref, _ = _ode_reference(coeffs, u0, direction, t)
+    # DOP853's relative error grows towards the blow-up (measured ≲ 6e-12 of 1 + |u| at 0.95 t₊): 1e-10 is safe
+    assert np.max(np.abs(motion.u(t) - ref) / (1 + np.abs(ref))) <= 1e-10
+    # the escape time is the time to ∞: ∫ du/√P from u0 outwards (plus twice the way to r and back if moving
+    # inwards first), by mpmath's quadrature at 30 digits
+    from mpmath import inf, mp, mpf, quad, sqrt
+    with mp.workdps(30):
+        c = [mpf(x) for x in coeffs]
+        root, out = mpf(float(motion.interval[0])), np.sign(lead)
+        f = lambda x: 1 / sqrt(abs(mp.polyval(c, x)))  # noqa: E731
+        to_inf = quad(f, [mpf(u0), out * inf])
+        back = 2 * abs(quad(f, [root, mpf(u0)])) if direction * out < 0 else 0
+        assert abs(after - float(abs(to_inf) + back)) <= 1e-12 * after
+    # no period; the root is the turning point
+    assert not np.isfinite(float(motion.u_period))
+
+
+def test_cubic_with_one_real_root_satisfies_the_quadrature_symbolically():
+    """u = r + A(1 − cn)/(1 + cn), m = 1/2 − (r − α)/(2A), κ² = c3 A (the side u ≥ r; u → −u gives the other):
+    κ²(du/dv)² − P(u) ≡ 0 with du/dv = 2A sn dn/(1 + cn)², sn² = 1 − cn², dn² = 1 − m sn² (Byrd & Friedman
+    239.00, derived in quadrature_open._cubic_complex_pair and checked here by difference)."""
+    r, alpha, cn = sp.symbols("r alpha cn", real=True)
+    beta, c3 = sp.symbols("beta c3", positive=True)
+    A = sp.sqrt((r - alpha) ** 2 + beta**2)
+    m = sp.Rational(1, 2) - (r - alpha) / (2 * A)
+    u = r + A * (1 - cn) / (1 + cn)
+    du_dv_sq = 4 * A**2 * (1 - cn**2) * (1 - m * (1 - cn**2)) / (1 + cn) ** 4
+    P = c3 * (u - r) * ((u - alpha) ** 2 + beta**2)
+    assert sp.simplify(sp.expand(c3 * A * du_dv_sq - P)) == 0
+
+
+def test_cubic_with_a_pair_near_the_motion_is_refused():
+    # P = u((u − 1)² + 1e-18): the motion u ≥ 0 passes the nearly double root at u = 1, 1 − m ≈ 2.5e-19
+    with pytest.raises(NotElliptic, match="nearly double root the motion passes"):
+        elliptic_motion(["1", "-2", "1.000000000000000001", "0"], 0.5, 1)
+
+
+_ESCAPING = "x_dot**2/2 + x**3/3 + x"  # V = −x³/3 − x: F = 2E + 2x³/3 + 2x, one real root (F' > 0)
+
+
+def test_cubic_with_one_real_root_as_a_scene_until_its_escape():
+    init = dict(x=0.5, x_dot=1.0)
+    motion = elliptic_motion([2.0 / 3.0, 0.0, 2.0, 2 * (0.5 - 0.5**3 / 3 - 0.5)], 0.5, 1)
+    t_escape = motion.escape_times[1]  # ≈ 2.474
+    exact = run_scene(_scene(["x"], _ESCAPING, {}, init, t_end=0.9 * t_escape, samples=201,
+                             summary=["x_min", "x_max", "period"]))
+    assert exact.report["method"] == "exact", exact.report.get("note")
+    assert exact.report["details"]["closed_form"]["motion"] == "unbounded: reaches infinity in finite time"
+    assert exact.report["details"]["closed_form"]["escape_times"][1] == pytest.approx(t_escape, rel=1e-14)
+    integrated = run_scene(_scene(["x"], _ESCAPING, {}, init, t_end=0.9 * t_escape, samples=201, method="integrate"))
+    for q, column in exact.columns.items():
+        # both within their estimates of the truth: the integration's (rtol 1e-12 met) dominates
+        bound = 10 * (exact.report["error_estimate"] + integrated.report["error_estimate"]) + 1e-12
+        assert np.max(np.abs(column - integrated.columns[q])) <= bound * (1 + np.max(np.abs(column))), q
+    # the root of P is the turning point (x_min, in the past here), there is no x_max and no period
+    s, e = exact.report["summary"], exact.report["summary_error"]
+    assert abs(s["x_min"] - float(motion.interval[0])) <= 1e-15 and s["x_max"] is None and s["period"] is None
+    # x_min's estimate moves E by 8 ulp of the run's energy scale, which grows to ~4e5 towards the escape (ẋ ~ 900):
+    # ~1e-9, pessimistic (the value is the root to 1e-15) but an upper bound
+    assert e["x_min"] <= 1e-8 and "reaches infinity" in e["period"]
+    # past the escape the closed form is refused with the time (auto then integrates, which stops there too)
+    with pytest.raises(InvalidInputError, match="reaches infinity at t = 2.474"):
+        run_scene(_scene(["x"], _ESCAPING, {}, init, t_end=3.0, samples=31, method="exact"))
+
+
+def test_the_unbounded_branch_of_a_real_cubic_is_refused_past_its_escape():
+    """u ≥ r3 of a cubic with three real roots reaches ∞ at v = K: past it the Möbius form comes back from −∞ ... ∞
+    (u̇² = P(u) still holds, so the conserved energy cannot tell), which is no motion: refused with the time."""
+    lag, init = "x_dot**2/2 + x**3/3 - x", dict(x=2.0, x_dot=float(np.sqrt(4 / 3)))  # P = 2x³/3 − 2x, x ≥ √3
+    before = run_scene(_scene(["x"], lag, {}, init, t_end=1.5, samples=151))
+    assert before.report["method"] == "exact"
+    assert before.report["details"]["closed_form"]["motion"] == "unbounded: reaches infinity in finite time"
+    with pytest.raises(InvalidInputError, match="reaches infinity at t = 1.9411"):
+        run_scene(_scene(["x"], lag, {}, init, t_end=3.0, samples=31, method="exact"))
+
+
 # m = 1: from a turning point towards a double root of P (a separatrix), or to ∞ where the quadratic's P has its
 # double branch point (hyperbolic escape, u = r + (r − r') sinh²(κt + v_s)); never returning
 ASYMPTOTIC = [

@@ -38,13 +38,19 @@ x = sech t), or the unbounded quadratic P = c0 (u − r1)(u − r2), c0 > 0, who
 is not reduced (K = ∞).
 
 Degree ≤ 1 — uniform motion (a free particle, a free rotor) and uniformly accelerated motion (a body under
-uniform gravity), u = u0 + u̇0 t + (c1/4) t² — and the quadratic with no real root, u = α + β sinh(κt + v_s)
-(no turning point: over the top of an inverted parabola) are solved in :mod:`mechderive.solvers.quadrature_open`,
-to which :func:`elliptic_motion` hands them.
+uniform gravity), u = u0 + u̇0 t + (c1/4) t² —, the quadratic with no real root, u = α + β sinh(κt + v_s)
+(no turning point: over the top of an inverted parabola), and the cubic with one real root r, u = r +
+σA(1 − cn)/(1 + cn) (from r out to ∞, reached in finite time) are solved in
+:mod:`mechderive.solvers.quadrature_open`, to which :func:`elliptic_motion` hands them.
+
+Where u reaches ∞ in finite time — the cubic's unbounded branch u ≥ r3 at v = ±K (w = 1), the one-real-root
+cubic at v = ±2K (cn = −1) — :attr:`EllipticMotion.escape_times` gives the two times around t = 0; beyond them
+the formulas continue through ∞ (u̇² = P(u) still holds) but describe no motion, and the caller refuses them.
 
 Not covered (the caller integrates instead; :class:`NotElliptic` says why): a quartic with only complex
-roots or escaping through infinity, a cubic with one real root, a quadratic with a double root or a complex pair
-too near the real axis to resolve at 40 digits, an unstable equilibrium (a start on a double root with P'' > 0), the cyclic rates at
+roots or escaping through infinity, a cubic with a complex pair too near the real axis on its motion (1 − m <
+1e-15), a quadratic with a double root or a complex pair too near the real axis to resolve at 40 digits, the
+cubic with three real roots and negative lead on u ≤ r1, an unstable equilibrium (a start on a double root with P'' > 0), the cyclic rates at
 m = 1, and rates with complex poles, poles on the motion, or a polynomial part of degree > 1 in w.
 """
 
@@ -417,7 +423,8 @@ def _elliptic_motion(coefficients: Sequence, u0: Any, direction: int, dps: int) 
             return open_motion(c, [], u0, direction)
         P = lambda x: mp.polyval(c, x)  # noqa: E731
         roots = _real_roots(c)
-        if degree == 2 and not roots:  # no turning point: u = α + β sinh(κt + v_s) (quadrature_open)
+        if degree == 2 and not roots or degree == 3 and len(roots) == 1:
+            # no turning point: u = α + β sinh(κt + v_s); or one, and an escape to ∞ in cn (quadrature_open)
             from .quadrature_open import open_motion
 
             return open_motion(c, roots, u0, direction)

@@ -415,6 +415,11 @@ class ClosedMotion:
         t = np.asarray(t, dtype=float)
         picks = t[np.unique(np.linspace(0, len(t) - 1, min(len(t), 5)).astype(int))]
         h = 1e-4 * self.time_scale
+        escape = self.motion.escape_times
+        if escape is not None:
+            # near a blow-up u ~ (t₊ − t)⁻²: the truncation is ~ (h/(t₊ − t))² of the rate, kept at ~10⁻⁶ (the
+            # rounding, ulp(u)/h, stays ~10⁻¹³ of it)
+            h = min(h, 1e-3 * min(escape[1] - float(np.max(picks)), float(np.min(picks)) - escape[0]))
         angles = [n for n in names if n in (self.remaining, *self.cyclic)]
         if not angles:
             return None
