@@ -387,6 +387,53 @@ def test_the_unbounded_branch_of_a_real_cubic_is_refused_past_its_escape():
         run_scene(_scene(["x"], lag, {}, init, t_end=3.0, samples=31, method="exact"))
 
 
+# --- cyclic rates polynomial in u on the elementary forms ----------------------------------------------------
+
+ELEMENTARY_RATES = [
+    # (name, P's coefficients, u0, direction, R's coefficients in u)
+    ("uniformly accelerated, R quadratic", [-2.0, 1.0], 0.0, 1, [0.3, -1.0, 2.0]),
+    ("uniform, R linear", [2.0], 0.3, -1, [1.0, 0.5]),
+    ("exponential, R quadratic", [1.0, -1.0, 2.5], 0.3, 1, [0.5, -1.0, 2.0]),
+    ("exponential, R linear", [4.0, 8.0, 4.5], -0.3, -1, [-1.0, 0.7]),
+]
+
+
+@pytest.mark.parametrize("name, coeffs, u0, direction, numerator", ELEMENTARY_RATES,
+                         ids=[c[0] for c in ELEMENTARY_RATES])
+def test_polynomial_rates_integrate_on_the_elementary_forms(name, coeffs, u0, direction, numerator):
+    """ċ = R(u) polynomial: a polynomial in t on u = u0 + s t + a t², Σ C_j e^{jκt} on the exponential form."""
+    motion = elliptic_motion(coeffs, u0, direction)
+    integral = rate_integral(motion, numerator, [1.0])
+    t = np.linspace(0.0, 2.5, 251)
+    _, ref = _ode_reference(coeffs, u0, direction, t, lambda u: np.polyval(numerator, u))
+    # DOP853 at rtol 1e-13 (measured ≲ 5e-14 of the largest value here): 1e-12 is safe
+    assert np.max(np.abs(integral(t) - ref)) <= 1e-12 * (1 + np.max(np.abs(ref)))
+    # the doubles against the same sums at 30 digits (what the estimate measures): rounding, a few ulp
+    from mpmath import mp
+    with mp.workdps(30):
+        assert max(abs(float(integral.value_mp(float(x))) - y) for x, y in zip(t[::25], integral(t[::25]))) <= \
+            1e-15 * (1 + np.max(np.abs(ref)))
+    with pytest.raises(NotElliptic, match="poles in u"):
+        rate_integral(motion, [1.0], [1.0, 0.0])  # R = 1/u: the motion may pass its pole
+
+
+def test_projectile_is_a_parabola_in_closed_form():
+    """L = m(ẋ² + ż²)/2 − m g z: x cyclic (ẋ = p_x/m), z uniformly accelerated; by hand x = x0 + ẋ0 t,
+    z = z0 + ż0 t − g t²/2."""
+    init = dict(x=0.5, z=1.0, x_dot=2.0, z_dot=3.0)
+    result = run_scene(_scene(["x", "z"], "m*(x_dot**2 + z_dot**2)/2 - m*g*z", dict(m=1.5, g=9.81), init, t_end=2.0,
+                              samples=201, summary=["z_max", "x_per_period"]))
+    assert result.report["method"] == "exact", result.report.get("note")
+    t = np.linspace(0.0, 2.0, 201)
+    # the same polynomials with constants rounded once (p_x/m, E): a few ulp of the largest |x|, |z| (~14)
+    assert np.max(np.abs(result.columns["x"] - (0.5 + 2.0 * t))) <= 4 * 2.0**-52 * 5
+    assert np.max(np.abs(result.columns["z"] - (1.0 + 3.0 * t - 9.81 * t**2 / 2))) <= 4 * 2.0**-52 * 14
+    assert np.max(np.abs(result.columns["x_dot"] - 2.0)) <= 4 * 2.0**-52 * 2
+    s, e = result.report["summary"], result.report["summary_error"]
+    assert abs(s["z_max"] - (1.0 + 9.0 / (2 * 9.81))) <= 4e-16 * 2
+    assert s["x_per_period"] is None and "no period" in e["x_per_period"]
+
+
 # m = 1: from a turning point towards a double root of P (a separatrix), or to ∞ where the quadratic's P has its
 # double branch point (hyperbolic escape, u = r + (r − r') sinh²(κt + v_s)); never returning
 ASYMPTOTIC = [
@@ -462,6 +509,11 @@ SYSTEMS = [
     # no turning point: over the top of an inverted parabola
     ("over an inverted parabola", ["x"], "x_dot**2/2 + k*x**2/2", dict(k=1.0), dict(x=-0.5, x_dot=1.0),
      "unbounded: no turning point"),
+    # a cyclic rate polynomial in u on them: a projectile (ẋ constant) and ẏ = p_y − w x with an inverted k x²/2
+    ("projectile", ["x", "z"], "m*(x_dot**2 + z_dot**2)/2 - m*g*z", dict(m=1.0, g=9.81),
+     dict(x=0.0, z=0.0, x_dot=3.0, z_dot=4.0), "unbounded: uniformly accelerated"),
+    ("gyroscopic coupling over an inverted parabola", ["x", "y"], "(x_dot**2 + y_dot**2)/2 + w*x*y_dot + k*x**2/2",
+     dict(w=1.0, k=2.0), dict(x=0.2, y=0.0, x_dot=1.0, y_dot=0.5), "unbounded: no turning point"),
     ("free rotor", ["theta"], "J*theta_dot**2/2", dict(J=0.3), dict(theta=0.5, theta_dot=2.5), "unbounded: uniform motion"),
 ]
 

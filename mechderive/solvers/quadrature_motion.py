@@ -43,6 +43,9 @@ uniform gravity), u = u0 + u̇0 t + (c1/4) t² —, the quadratic with no real r
 σA(1 − cn)/(1 + cn) (from r out to ∞, reached in finite time) are solved in
 :mod:`mechderive.solvers.quadrature_open`, to which :func:`elliptic_motion` hands them.
 
+A cyclic rate ċ = R(u) polynomial in u integrates on the degree ≤ 1 and exponential forms to a polynomial in t
+or a sum of e^{jκt} (:func:`rate_integral` hands them to :func:`~.quadrature_open.elementary_rate_integral`).
+
 Where u reaches ∞ in finite time — the cubic's unbounded branch u ≥ r3 at v = ±K (w = 1), the one-real-root
 cubic at v = ±2K (cn = −1) — :attr:`EllipticMotion.escape_times` gives the two times around t = 0; beyond them
 the formulas continue through ∞ (u̇² = P(u) still holds) but describe no motion, and the caller refuses them.
@@ -50,7 +53,8 @@ the formulas continue through ∞ (u̇² = P(u) still holds) but describe no mot
 Not covered (the caller integrates instead; :class:`NotElliptic` says why): a quartic with only complex
 roots or escaping through infinity, a cubic with a complex pair too near the real axis on its motion (1 − m <
 1e-15), a quadratic with a double root or a complex pair too near the real axis to resolve at 40 digits, the
-cubic with three real roots and negative lead on u ≤ r1, an unstable equilibrium (a start on a double root with P'' > 0), the cyclic rates at
+cubic with three real roots and negative lead on u ≤ r1, rates with poles in u on the degree ≤ 2 unbounded
+forms and any rate on the one-real-root cubic's cn form, an unstable equilibrium (a start on a double root with P'' > 0), the cyclic rates at
 m = 1, and rates with complex poles, poles on the motion, or a polynomial part of degree > 1 in w.
 """
 
@@ -716,9 +720,10 @@ def rate_integral(motion: EllipticMotion, numerator: Sequence, denominator: Sequ
     mpmath reads); raises :class:`NotElliptic` where the partial fractions in w are not the simple kind the
     module docstring lists."""
     mp = _mp()
-    if getattr(motion, "elementary", False):
-        raise NotElliptic("expected a periodic motion for a cyclic coordinate's rate, got an unbounded one in "
-                          "elementary functions of t (its rates are not covered)")
+    if getattr(motion, "elementary", False):  # polynomial or exponential in t: a polynomial rate in closed form
+        from .quadrature_open import elementary_rate_integral
+
+        return elementary_rate_integral(motion, numerator, denominator)
     if isinstance(motion, EllipticMotionCn):
         raise NotElliptic("expected a motion in sn² for a cyclic coordinate's Π, got a cn form (a quartic with "
                           "complex roots, or a cubic with one real root): its rates are not covered")

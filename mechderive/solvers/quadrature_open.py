@@ -29,19 +29,25 @@ against DOP853 on that equation:
   (:attr:`~mechderive.solvers.quadrature_motion.EllipticMotion.escape_times`), and the closed form refuses times
   beyond, as for the cubic's real-root branch u ≥ r3.
 
-Not covered here: a quadratic with a double real root (u − α ∝ e^{±κt}), and the cyclic rates on these forms.
+A cyclic coordinate's rate ċ = R(u) that is a polynomial in u integrates in closed form on the first two
+(:func:`elementary_rate_integral`): on u = u0 + s t + a t², R(u(t)) is a polynomial in t; on u = α + p₊E + p₋/E,
+E = e^{κt}, it is Σ_j C_j E^j (j = −deg R … deg R), and ∫₀^t = C_0 t + Σ_{j≠0} C_j (e^{jκt} − 1)/(jκ) — a
+projectile's horizontal coordinate, ẏ = p_y − w x with a magnetic-like coupling.
+
+Not covered here: a quadratic with a double real root (u − α ∝ e^{±κt}); rates with poles in u (a rational R,
+which the motion may pass) on these forms, and any rate on the cubic's cn form.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Sequence
 
 import numpy as np
 
 from .quadrature_motion import DPS, EllipticMotionCn, NotElliptic, _mp, _split_mp
 
-__all__ = ["ElementaryMotion", "EllipticMotionCubicPair", "open_motion"]
+__all__ = ["ElementaryMotion", "EllipticMotionCubicPair", "ElementaryRate", "open_motion", "elementary_rate_integral"]
 
 
 @dataclass
@@ -349,3 +355,103 @@ def _cubic_complex_pair(c: list, r: Any, u0: Any, direction: int) -> EllipticMot
                                      mp.mpf("nan")), mob, m, m1, kappa, v_start, K, mp.inf, 3)
     motion.sigma = float(sigma)
     return motion
+
+
+# --- ∫ R(u(t)) dt for a polynomial R -------------------------------------------------------------------------
+
+def _poly_mul(p: list, q: list) -> list:
+    """The product of two coefficient lists (lowest degree first)."""
+    out = [0] * (len(p) + len(q) - 1)
+    for i, x in enumerate(p):
+        for j, y in enumerate(q):
+            out[i + j] += x * y
+    return out
+
+
+@dataclass
+class ElementaryRate:
+    """∫₀^t R(u(t')) dt' on an :class:`ElementaryMotion` for a polynomial R (see the module docstring):
+    ``form`` "polynomial" with ``coefficients`` of the integral in t (lowest first, 40 digits: ∫ = Σ c_k t^k), or
+    "exponential" with ``coefficients`` {j: C_j} of R(u(t)) = Σ C_j e^{jκt}."""
+
+    motion: ElementaryMotion
+    coefficients: Any
+    _f: dict = field(default_factory=dict, repr=False)
+
+    @property
+    def advance(self) -> Any:
+        raise NotElliptic("expected a periodic motion for an advance per period, got an unbounded one (no period)")
+
+    def __call__(self, t: Any, jac: tuple | None = None) -> np.ndarray:
+        t = np.asarray(t, dtype=float) if jac is None else jac[0]
+        mp = _mp()
+        if self.motion.form == "polynomial":
+            if "c" not in self._f:
+                with mp.workdps(DPS):
+                    self._f["c"] = [float(x) for x in self.coefficients]
+            return np.polyval(self._f["c"][::-1], t)
+        from ..special._doubledouble import two_prod
+
+        if "c" not in self._f:
+            with mp.workdps(DPS):
+                self._f["c"] = {j: float(x) for j, x in self.coefficients.items()}
+        self.motion._doubles()
+        k_hi, k_lo = self.motion._f["k"]
+        p, pe = two_prod(np.broadcast_to(k_hi, t.shape).astype(float), t)
+        small = pe + k_lo * t
+        total = self._f["c"].get(0, 0.0) * t
+        for j, cj in self._f["c"].items():
+            if j == 0:
+                continue
+            # (e^{jκt} − 1)/(jκ) from expm1 of the rounded phase, its remainder jδ added to first order
+            with np.errstate(over="ignore"):
+                growth = np.expm1(j * p) + np.exp(j * p) * (j * small)
+            total = total + cj * growth / (j * k_hi)
+        return total
+
+    def value_mp(self, t) -> Any:
+        """The integral at t (mpmath, at the caller's precision): the same sums from the 40-digit coefficients."""
+        mp = _mp()
+        t = mp.mpf(t)
+        if self.motion.form == "polynomial":
+            return mp.polyval(list(self.coefficients)[::-1], t)
+        kap = self.motion.kappa
+        return sum((cj * t if j == 0 else cj * mp.expm1(j * kap * t) / (j * kap)) for j, cj in self.coefficients.items())
+
+
+def elementary_rate_integral(motion: ElementaryMotion, numerator: Sequence, denominator: Sequence) -> ElementaryRate:
+    """∫ R(u) dt along ``motion`` for R = N/D (coefficients in u, highest first) with D a nonzero constant; raises
+    :class:`NotElliptic` for a rate with poles in u."""
+    mp = _mp()
+    with mp.workdps(DPS):
+        N = [mp.mpf(x) for x in numerator]
+        D = [mp.mpf(x) for x in denominator]
+        while len(D) > 1 and D[0] == 0:
+            D = D[1:]
+        if len(D) != 1 or D[0] == 0:
+            raise NotElliptic(f"expected a rate polynomial in u on a motion in elementary functions of t, got a "
+                              f"denominator of degree {len(D) - 1} (poles in u: not covered)")
+        R = [x / D[0] for x in N][::-1]  # lowest degree first
+        if motion.form == "polynomial":
+            u = list(motion.constants)  # u0 + s t + a t², lowest first
+            in_t, power = [mp.mpf(0)], [mp.mpf(1)]
+            for coef in R:
+                term = [coef * x for x in power]
+                in_t = [a + b for a, b in zip(in_t + [0] * (len(term) - len(in_t)), term + [0] * (len(in_t) - len(term)))]
+                power = _poly_mul(power, u)
+            # ∫₀^t Σ a_k t^k = Σ a_k t^{k+1}/(k + 1)
+            return ElementaryRate(motion, [mp.mpf(0)] + [a / (k + 1) for k, a in enumerate(in_t)])
+        alpha, p_plus, p_minus = motion.constants
+        # u = p₋E⁻¹ + α + p₊E as a Laurent polynomial {j: coefficient}; its powers by convolution
+        u = {-1: p_minus, 0: alpha, 1: p_plus}
+        total: dict = {}
+        power = {0: mp.mpf(1)}
+        for coef in R:
+            for j, x in power.items():
+                total[j] = total.get(j, 0) + coef * x
+            nxt: dict = {}
+            for j, x in power.items():
+                for i, y in u.items():
+                    nxt[i + j] = nxt.get(i + j, 0) + x * y
+            power = nxt
+        return ElementaryRate(motion, {j: x for j, x in total.items() if x != 0})

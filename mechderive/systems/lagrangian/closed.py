@@ -15,7 +15,14 @@ The recipe, each step derived:
    (1 − cos q = 2 sin²(q/2)).  Through both folds (a rotation) q = q_a + s·am(v), exact for the sine-type
    substitutions (−1 + 2 sn² = cos(π + 2 am)).
 4. c(t) = c0 + ∫ R_c(u) dt by partial fractions in w = sn² and Π
-   (:func:`~mechderive.solvers.quadrature_motion.rate_integral`).
+   (:func:`~mechderive.solvers.quadrature_motion.rate_integral`); on the motions in elementary functions of t
+   (deg P ≤ 1, the quadratic with no real root: :mod:`mechderive.solvers.quadrature_open`) for R_c polynomial in
+   u, as a polynomial in t or a sum of exponentials.
+
+The unbounded motions (:mod:`~mechderive.solvers.quadrature_open`, and the cubic's branch u ≥ r3) have no period;
+their root of P, where there is one, is the turning point q passes (``<q>_min`` or ``<q>_max``, the other side
+unbounded).  Where u reaches ∞ in finite time (``escape_times``) times beyond are refused: the formulas continue
+through ∞ there, and u̇² = P(u) — hence the energy check — would not notice.
 
 The error estimate is measured on the run: at the last output time and five more (picked by the golden
 ratio, never all on whole periods) every output is evaluated again from the Jacobi functions and Π at 30
@@ -309,6 +316,8 @@ class ClosedMotion:
         """``<q>_min``, ``<q>_max`` (the turning points of q; the fold's mirror image for a libration through a
         fold) or ``<c>_per_period`` (c's advance over one period of q)."""
         if name.endswith("_per_period"):
+            if getattr(self.motion, "elementary", False):
+                raise OutOfReach(f"{name}: no period ({self.kind})")
             integral, _, _ = self.rate(name[: -len("_per_period")])
             return float(integral.advance * (2 if self.kind == "libration through a fold" else 1))
         if self.kind == "rotation" or self.kind.startswith("unbounded: q"):
