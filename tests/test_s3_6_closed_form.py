@@ -233,6 +233,44 @@ def test_free_rotor_turns_uniformly():
     assert result.report["summary"]["period"] is None
 
 
+def test_free_particle_moves_uniformly_in_every_coordinate():
+    """L = m|ṙ|²/2: every coordinate cyclic; the first is the one solved (P = 2E/m constant: uniform, or at rest),
+    the others by their constant rates: r = r0 + ṙ0 t by hand."""
+    init = dict(x=0.0, y=1.0, z=3.0, x_dot=0.0, y_dot=-2.0, z_dot=0.5)
+    result = run_scene(_scene(["x", "y", "z"], "m*(x_dot**2 + y_dot**2 + z_dot**2)/2", dict(m=2.0), init, t_end=3.0,
+                              samples=31))
+    assert result.report["method"] == "exact", result.report.get("note")
+    assert result.report["details"]["closed_form"]["motion"] == "steady"  # x at rest; y and z move
+    t = np.linspace(0.0, 3.0, 31)
+    for q in "xyz":
+        # constants rounded once (√(2E/m), p/m): a few ulp of |q| ≤ 5
+        assert np.max(np.abs(result.columns[q] - (init[q] + init[q + "_dot"] * t))) <= 4 * 2.0**-52 * 5, q
+
+
+def test_inverse_square_repulsion_under_u_equal_q_squared():
+    """L = ẋ²/2 − k/x²: u = x² gives u̇² = 8E u − 8k (degree 1), so x² = x0² + 2x0ẋ0 t + 2E t² by hand — the
+    turning point x² = k/E is the closest approach, x_min."""
+    result = run_scene(_scene(["x"], "x_dot**2/2 - k/x**2", dict(k=1.0), dict(x=1.0, x_dot=-1.0), t_end=3.0,
+                              samples=301, summary=["x_min"]))
+    assert result.report["method"] == "exact", result.report.get("note")
+    assert result.report["details"]["closed_form"]["substitution"] == "u = q²"
+    t = np.linspace(0.0, 3.0, 301)
+    E = 0.5 + 1.0
+    # √ of the same polynomial, its constants rounded once: a few ulp of x ≤ 4.7
+    assert np.max(np.abs(result.columns["x"] - np.sqrt(1.0 - 2.0 * t + 2 * E * t**2))) <= 4 * 2.0**-52 * 5
+    assert abs(result.report["summary"]["x_min"] - np.sqrt(1.0 / E)) <= 4e-16
+
+
+def test_a_collapse_through_a_fold_is_refused_with_the_reason():
+    """L = ẋ²/2 + k/x² falling inwards: x² = u reaches 0 with u̇ ≠ 0, where ẋ = u̇/2x is infinite (x(t) has no
+    continuation); the closed form stops there with the reason (q = √u would stick at 0)."""
+    scene = dict(t_end=3.0, samples=31, method="exact")
+    with pytest.raises(InvalidInputError, match="reaches the fold of u = q² at u = 0 .* a collapse"):
+        run_scene(_scene(["x"], "x_dot**2/2 + k/x**2", dict(k=1.0), dict(x=1.0, x_dot=-0.5), **scene))
+    before = run_scene(_scene(["x"], "x_dot**2/2 + k/x**2", dict(k=1.0), dict(x=1.0, x_dot=-0.5), t_end=0.5))
+    assert before.report["method"] == "exact"
+
+
 # --- a quadratic with no real root: u = α + β sinh(κt + v_s) ---------------------------------------------------
 
 NO_TURNING_POINT = [

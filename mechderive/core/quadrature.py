@@ -421,21 +421,21 @@ def cyclic_rates(model: LagrangianModel, substitution: Substitution) -> dict:
     return out
 
 
-class _NothingCyclic(LagrangianModel):
-    """A model of one coordinate with no coordinate counted as cyclic (see :func:`one_free_coordinate`)."""
+class _FirstNotCyclic(LagrangianModel):
+    """A model whose first coordinate is not counted as cyclic (see :func:`one_free_coordinate`)."""
 
     @derived
     def cyclic_coordinates(self) -> tuple:
-        return ()
+        return tuple(self.coordinates[1:])
 
 
 def one_free_coordinate(model: LagrangianModel) -> LagrangianModel:
-    """``model`` itself, or, where its only coordinate is cyclic (L = I θ̇²/2: a free rotor), the same L with that
-    coordinate counted as the one left (the reduction by it would leave none): q̇² = F = 2E/M(q̇ only), a constant P
-    under u = q, whose closed form is uniform motion."""
-    if len(model.coordinates) != 1 or model.remaining_coordinates:
+    """``model`` itself, or, where every coordinate is cyclic (L = I θ̇²/2: a free rotor; m|ṙ|²/2: a free particle),
+    the same L with its first coordinate counted as the one left (the reduction by all would leave none): q̇² = F
+    constant, P of degree 0 under u = q — uniform motion — and the others' rates constant."""
+    if not model.coordinates or model.remaining_coordinates:
         return model
-    return _NothingCyclic(model.lagrangian, list(model.coordinates))
+    return _FirstNotCyclic(model.lagrangian, list(model.coordinates))
 
 
 # --- explicit time that is only a gauge ----------------------------------------------------------------

@@ -384,6 +384,17 @@ class ClosedMotion:
             return (self.q_fold + self.eps * shape.scale * f,
                     self.eps * shape.scale * df * sigma_dot / np.sqrt(2.0))
         u = mo.u(t, jac)
+        if self.kind.startswith("unbounded") and not self.kind.startswith("unbounded: q"):
+            # an unbounded motion crossing a fold value of g that is not its turning point: there g'(q) = 0 while
+            # u̇ ≠ 0, so q̇ = u̇/g'(q) is infinite — a collapse (u = x² reaching 0 under V = −k/x²); past it g⁻¹
+            # has no branch to follow (q = √u would stick at 0)
+            u_start = float(mo.u(np.zeros(1))[0])
+            for u_e, _, _ in shape.folds:
+                past = np.sign(u - u_e) == -np.sign(u_start - u_e)
+                if u_start != u_e and np.any(past):
+                    raise OutOfReach(f"{self.remaining} reaches the fold of {self.found.name} at u = {u_e:g} with u̇ ≠ 0 "
+                                     f"(d{self.remaining}/dt infinite: a collapse) before "
+                                     f"{'t' if self.along is None else self.along} = {float(np.asarray(t)[past][0]):.6g}")
         if self.kind.startswith("unbounded: q"):
             past = np.sign(u) != np.sign(float(self.motion.u_mp(0.0)))
             if np.any(past):

@@ -472,8 +472,8 @@ class LagrangianSystem(System):
 
             model = self.equations.lagrangian_model
             model = without_time_gauge(model)[0] if self.definition.uses_time else model
-            # a single coordinate that is itself cyclic (a free rotor, a free particle): nothing is left to Routh-reduce
-            # to, so it is the coordinate the quadrature solves (u̇² = P constant)
+            # every coordinate cyclic (a free rotor, a free particle): nothing would be left to Routh-reduce to, so the
+            # first is the coordinate the quadrature solves (u̇² = P constant)
             self.__dict__["_reduced_model"] = one_free_coordinate(model)
         return self.__dict__["_reduced_model"]
 
