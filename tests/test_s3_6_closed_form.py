@@ -233,6 +233,27 @@ def test_free_rotor_turns_uniformly():
     assert result.report["summary"]["period"] is None
 
 
+@pytest.mark.parametrize("lagrangian, parameters, initial, bounded, value", [
+    # the bead on a turning rod, r̈ = w² r (m = 1, hyperbolic): |r| ≥ √(−2E)/w = √1.75/2 on either side of 0
+    ("r_dot**2/2 + w**2*r**2/2", dict(w=2.0), dict(r=1.0, r_dot=-1.5), "r_min", np.sqrt(1.75) / 2),
+    ("r_dot**2/2 + w**2*r**2/2", dict(w=2.0), dict(r=-1.0, r_dot=1.5), "r_max", -np.sqrt(1.75) / 2),
+    ("r_dot**2/2 + w**2*r**2/2", dict(w=2.0), dict(r=-1.0, r_dot=-1.5), "r_max", -np.sqrt(1.75) / 2),
+    # a body under gravity pointing up (L = mż²/2 + mgz): its lowest point z0 − ż0²/2g, or its start at rest
+    ("m*r_dot**2/2 + m*g*r", dict(m=1.0, g=9.81), dict(r=1.0, r_dot=3.0), "r_min", 1.0 - 9.0 / (2 * 9.81)),
+    ("m*r_dot**2/2 + m*g*r", dict(m=1.0, g=9.81), dict(r=1.0, r_dot=0.0), "r_min", 1.0),
+], ids=["bead, r > 0", "bead, r < 0, inwards", "bead, r < 0, outwards", "gravity up, moving", "gravity up, at rest"])
+def test_unbounded_motions_report_their_turning_point_on_its_side(lagrangian, parameters, initial, bounded, value):
+    """The turning point bounds q on the motion's side only (that of u0, or of P > 0 from a start on the root) —
+    by hand; the other side has no bound and says so."""
+    result = run_scene(_scene(["r"], lagrangian, parameters, initial, t_end=1.0, samples=11,
+                              summary=["r_min", "r_max"]))
+    s, e = result.report["summary"], result.report["summary_error"]
+    other = "r_max" if bounded == "r_min" else "r_min"
+    # the root of P from E rounded once: a few ulp
+    assert abs(s[bounded] - value) <= 4e-16 * abs(value) and e[bounded] <= 1e-13
+    assert s[other] is None and "not bounded" in e[other]
+
+
 def test_free_particle_moves_uniformly_in_every_coordinate():
     """L = m|ṙ|²/2: every coordinate cyclic; the first is the one solved (P = 2E/m constant: uniform, or at rest),
     the others by their constant rates: r = r0 + ṙ0 t by hand."""

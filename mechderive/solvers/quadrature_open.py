@@ -126,12 +126,8 @@ class ElementaryMotion:
         return self._f["k"][0] * (c[1] * ep - c[2] * em)
 
     def minus(self, point: Any, t: Any, jac: tuple | None = None) -> np.ndarray:
-        """u(t) − ``point``: from u0 − point at the working precision (a rate's poles: none are offered here)."""
-        t = np.asarray(t, dtype=float) if jac is None else jac[0]
-        mp = _mp()
-        with mp.workdps(DPS):
-            shift = float(self.constants[0] - point)
-        return shift + (self.u(t, (t,)) - self._doubles()[0])
+        """u(t) − ``point`` (the rates offered here have no poles, near which this would need more care)."""
+        return self.u(t, jac) - float(point)
 
     def signed_root(self, end: str, t: Any, jac: tuple | None = None) -> tuple:
         raise NotElliptic("expected no fold of the substitution on a motion without an elliptic closed form "
@@ -158,8 +154,6 @@ class EllipticMotionCubicPair(EllipticMotionCn):
     of :class:`EllipticMotionCn` with (A + B cn)/(C + D cn) = ((r + σA) + (r − σA) cn)/(1 + cn), evaluated in the
     forms that keep their digits at both ends: σ(u − r) = A sn²/(1 + cn)² while cn ≥ 0 (near the root), and
     A (1 − cn)²/sn² while cn < 0 (near the escape at cn = −1, where 1 + cn would cancel)."""
-
-    sigma: float = 1.0
 
     def _parts(self) -> tuple[float, float]:
         A, B, C, D, det = self._mob()
@@ -255,8 +249,7 @@ def _polynomial(c: list, u0: Any, direction: int) -> ElementaryMotion:
         if steady:  # P ≡ 0: at rest, u ≡ u0
             speed = mp.mpf(0)
             interval = (u0, u0)
-        return ElementaryMotion(tuple(c), 1 if c1 else 0, "polynomial", (u0, speed, mp.mpf(0)), interval, mp.mpf(1),
-                                steady=steady)
+        return ElementaryMotion(tuple(c), 0, "polynomial", (u0, speed, mp.mpf(0)), interval, mp.mpf(1), steady=steady)
     speed = _speed(c, u0, direction)
     if direction == 0:
         # a start on the root: u̇ grows as (c1/2) t, towards the side where P > 0 (that of c1) — the form covers it
@@ -351,10 +344,8 @@ def _cubic_complex_pair(c: list, r: Any, u0: Any, direction: int) -> EllipticMot
     v0 = mp.ellipf(2 * mp.asin(mp.sqrt(x0 / (A + x0))), m)
     # σ du/dv ≥ 0 on (0, 2K): u moves away from r as v grows on the side σ
     v_start = mp.mpf(0) if direction == 0 else (v0 if direction * sigma > 0 else -v0)
-    motion = EllipticMotionCubicPair(tuple(c), (r, sigma * mp.inf), (r, sigma * mp.inf, mp.mpf("nan"),
-                                     mp.mpf("nan")), mob, m, m1, kappa, v_start, K, mp.inf, 3)
-    motion.sigma = float(sigma)
-    return motion
+    return EllipticMotionCubicPair(tuple(c), (r, sigma * mp.inf), (r, sigma * mp.inf, mp.mpf("nan"), mp.mpf("nan")),
+                                   mob, m, m1, kappa, v_start, K, mp.inf, 3)
 
 
 # --- ∫ R(u(t)) dt for a polynomial R -------------------------------------------------------------------------

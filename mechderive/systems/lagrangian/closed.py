@@ -342,9 +342,17 @@ class ClosedMotion:
         if not np.isfinite(a) or a == b:
             raise OutOfReach(f"{name}: q is not bounded on this motion ({self.kind}; u has no turning point)")
         q_turn = float(self.shape.inverse(np.array(a), self.q0))
-        # q moves away from q_turn on the side where u does: the sign of (b − a)·g'(q)
+        # the side of a the motion lies on: u0's, or from a start on a itself where P > 0, the sign of P'(a) (a simple
+        # root) — not (b − a)'s: the hyperbolic quadratic's u ≤ r1 branch is listed (r1, ∞), ∞ being reached via −∞
+        u0 = float(self.motion.u(np.zeros(1))[0])
+        if u0 != a:
+            u_side = np.sign(u0 - a)
+        else:
+            c = [float(x) for x in self.motion.coefficients]
+            u_side = np.sign(np.polyval(np.polyder(c), a))
+        # q moves away from q_turn on the side where u does, through g'(q)
         with np.errstate(all="ignore"):
-            side = np.sign((b - a) * float(self.shape.dg(np.array(q_turn))))
+            side = u_side * np.sign(float(self.shape.dg(np.array(q_turn))))
         bounded = "_min" if side > 0 else "_max"
         if not name.endswith(bounded):
             raise OutOfReach(f"{name}: q is not bounded on this side ({self.kind}, from its turning point "
