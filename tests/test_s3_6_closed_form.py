@@ -92,6 +92,20 @@ def test_cubic_unbounded_branch_reaches_infinity_in_finite_time():
     assert np.max(np.abs(motion.u(t) / ref - 1)) <= 1e-9
 
 
+@pytest.mark.parametrize("u0, direction", [(-2.5, -1), (-2.5, 1), (-2.0, 0)], ids=["outwards", "inwards first",
+                                                                               "from the root"])
+def test_cubic_unbounded_branch_with_negative_lead_is_the_mirror_image(u0, direction):
+    # u ≤ r1 for a cubic with negative lead: ũ = −u on the branch ũ ≥ r̃3 of P(−ũ); infinite at v = ±K
+    coeffs = -np.poly((-2.0, 0.5, 3.0))
+    motion = elliptic_motion(coeffs, u0, direction)
+    before, after = motion.escape_times
+    t = np.linspace(0.0, 0.98 * after, 200)
+    ref, _ = _ode_reference(coeffs, u0, direction, t)
+    # as the branch u ≥ r3 above: DOP853's error grows towards the escape (measured ≲ 1e-11 of |u|)
+    assert np.max(np.abs(motion.u(t) / ref - 1)) <= 1e-9
+    assert float(motion.interval[0]) == pytest.approx(-2.0, abs=1e-15) and motion.interval[1] < 0
+
+
 def test_rate_integral_by_partial_fractions_and_pi():
     coeffs = -2.0 * np.poly((-2.0, 0.2, 0.9))   # a spherical pendulum's kind of cubic, u = cos θ in (0.2, 0.9)
     motion = elliptic_motion(coeffs, 0.5, 1)
@@ -442,6 +456,16 @@ def test_the_unbounded_branch_of_a_real_cubic_is_refused_past_its_escape():
     before = run_scene(_scene(["x"], lag, {}, init, t_end=1.5, samples=151))
     assert before.report["method"] == "exact"
     assert before.report["details"]["closed_form"]["motion"] == "unbounded: reaches infinity in finite time"
+    assert before.report["details"]["closed_form"]["period"] is None  # 2K/κ is the formula's, through ∞
+    # its mirror image: V = x³/3 − x, x ≤ −√3 falling to −∞ (P with negative lead, the branch u ≤ r1), against
+    # integration (rtol 1e-12 met by both; x reaches ~ −31)
+    mirror = dict(x=-2.0, x_dot=-float(np.sqrt(4 / 3)))
+    exact = run_scene(_scene(["x"], "x_dot**2/2 - x**3/3 + x", {}, mirror, t_end=1.5, samples=151, summary=["x_max"]))
+    integrated = run_scene(_scene(["x"], "x_dot**2/2 - x**3/3 + x", {}, mirror, t_end=1.5, samples=151,
+                                  method="integrate"))
+    assert exact.report["method"] == "exact" and exact.report["summary"]["x_max"] == pytest.approx(-np.sqrt(3), 1e-15)
+    bound = 10 * (exact.report["error_estimate"] + integrated.report["error_estimate"]) + 1e-12
+    assert np.max(np.abs(exact.columns["x"] - integrated.columns["x"])) <= bound * 31
     with pytest.raises(InvalidInputError, match="reaches infinity at t = 1.9411"):
         run_scene(_scene(["x"], lag, {}, init, t_end=3.0, samples=31, method="exact"))
 

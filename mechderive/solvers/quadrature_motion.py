@@ -12,7 +12,8 @@ other roots, and ∞ when the degree is odd (for a quadratic c = d = ∞ and m =
 branch points of ẇ² = 4κ² w(1 − w)(1 − m w) onto those of u̇² = P(u), so m is their cross-ratio and κ
 the constant ratio of the two sides; the chapter's u = u1 + (u2 − u1) sn²(…) for the heavy top (3.76) is
 the cubic case (d = ∞, B/C = u2 − u1), and Byrd & Friedman's 236.00, 254.00-257.00 and 238.00 are the
-others (oscillation between adjacent roots, and the cubic's unbounded branch u ≥ r3 through d = ∞).
+others (oscillation between adjacent roots, and the cubic's unbounded branch u ≥ r3 through d = ∞; with a
+negative lead, u ≤ r1 is its mirror image under u → −u).
 
 A rational function R(u) of the motion (a cyclic coordinate's rate ċ = R(u)) integrates in closed
 form the same way: R(M(w)) = Q0 + Q1 w + Σ_j c_j / (1 − n_j w) by partial fractions in w, and
@@ -52,14 +53,14 @@ the formulas continue through ∞ (u̇² = P(u) still holds) but describe no mot
 
 Not covered (the caller integrates instead; :class:`NotElliptic` says why): a quartic with only complex
 roots or escaping through infinity, a cubic with a complex pair too near the real axis on its motion (1 − m <
-1e-15), a quadratic with a double root or a complex pair too near the real axis to resolve at 40 digits, the
-cubic with three real roots and negative lead on u ≤ r1, rates with poles in u on the degree ≤ 2 unbounded
+1e-15), a quadratic with a double root or a complex pair too near the real axis to resolve at 40 digits, rates with poles in u on the degree ≤ 2 unbounded
 forms and any rate on the one-real-root cubic's cn form, an unstable equilibrium (a start on a double root with P'' > 0), the cyclic rates at
 m = 1, and rates with complex poles, poles on the motion, or a polynomial part of degree > 1 in w.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from typing import Any, Sequence
 
@@ -432,6 +433,14 @@ def _elliptic_motion(coefficients: Sequence, u0: Any, direction: int, dps: int) 
             from .quadrature_open import open_motion
 
             return open_motion(c, roots, u0, direction)
+        if degree == 3 and c[0] < 0 and len(roots) == 3 and u0 <= roots[0] + mp.mpf(2) ** -40 * (1 + abs(u0)):
+            # u ≤ r1 of a cubic with negative lead: the mirror image ũ = −u of the branch ũ ≥ r̃3 of P̃(ũ) = P(−ũ),
+            # whose lead −c3 is positive (B&F 238.00 reflected); M's numerator and the branch points change sign
+            mirrored = _elliptic_motion([x * (-1) ** (degree - i) for i, x in enumerate(c)], -u0, -direction, dps)
+            A, B, C, D = mirrored.mobius
+            return dataclasses.replace(mirrored, coefficients=tuple(c), interval=tuple(-x for x in mirrored.interval),
+                                       branch_points=tuple(-x for x in mirrored.branch_points), mobius=(-A, -B, C, D),
+                                       _f={})
         if degree == 4 and len(roots) == 2:
             return _complex_pair_quartic(c, roots, u0, direction)
         if degree == 4 and len(roots) < 4 or degree == 3 and len(roots) < 3 or degree == 2 and len(roots) < 2:

@@ -201,6 +201,9 @@ class ClosedMotion:
         # the period of q: twice u's through one fold (q returns after u's second turn), u's otherwise;
         # infinite at m = 1 (a separatrix, a hyperbolic escape)
         self.period = motion.u_period * (2 if self.kind == "libration through a fold" else 1)
+        if motion.escape_times is not None:
+            # the cubic's branch u ≥ r3 has 2K/κ as the period of its formula, which passes through ∞: no motion repeats
+            self.period = _mp().inf
         #: the motion's time scale: its period, or 1/κ where there is none
         self.time_scale = float(self.period) if np.isfinite(float(self.period)) else 1.0 / float(motion.kappa)
 
@@ -316,7 +319,7 @@ class ClosedMotion:
         """``<q>_min``, ``<q>_max`` (the turning points of q; the fold's mirror image for a libration through a
         fold) or ``<c>_per_period`` (c's advance over one period of q)."""
         if name.endswith("_per_period"):
-            if getattr(self.motion, "elementary", False):
+            if getattr(self.motion, "elementary", False) or self.motion.escape_times is not None:
                 raise OutOfReach(f"{name}: no period ({self.kind})")
             integral, _, _ = self.rate(name[: -len("_per_period")])
             return float(integral.advance * (2 if self.kind == "libration through a fold" else 1))
