@@ -268,6 +268,26 @@ def test_unbounded_motions_report_their_turning_point_on_its_side(lagrangian, pa
     assert s[other] is None and "not bounded" in e[other]
 
 
+def test_printed_formulas_of_a_projectile():
+    """``derive … closed_form_u`` for deg P ≤ 1: z = z₀ + ż₀ (t − t₀) − g (t − t₀)²/2 (symbolically, by difference), and
+    x − x₀ = (p_x/m)(t − t₀); m and κ do not apply and say so."""
+    from mechderive.errors import DerivationError
+    from mechderive.systems.lagrangian import from_lagrangian
+    from mechderive.systems.lagrangian.closed import solution_formulas
+
+    system = from_lagrangian("m*(x_dot**2 + z_dot**2)/2 - m*g*z", ["x", "z"], ["m", "g"])
+    formulas = solution_formulas(system)
+    names = {s.name: s for s in system.definition.parameter_symbols}
+    tau = sp.Symbol("t") - sp.Symbol("t_0")
+    u0, v0 = sp.Symbol("u_0", real=True), sp.Symbol("udot_0", real=True)
+    assert sp.simplify(formulas["u"][1] - (u0 + v0 * tau - names["g"] * tau**2 / 2)) == 0
+    assert sp.simplify(formulas["x"][1] - sp.Symbol("p_x", real=True) / names["m"] * tau) == 0
+    assert "m" not in formulas and "kappa" not in formulas
+    derivation = {d.name: d for d in system.derivations()}["closed_form_m"]
+    with pytest.raises(DerivationError, match="do not apply"):
+        derivation.build(None)
+
+
 def test_free_particle_moves_uniformly_in_every_coordinate():
     """L = m|ṙ|²/2: every coordinate cyclic; the first is the one solved (P = 2E/m constant: uniform, or at rest),
     the others by their constant rates: r = r0 + ṙ0 t by hand."""

@@ -600,6 +600,8 @@ def solution_formulas(system: Any) -> dict:
     u = found.variable
     P = found.polynomial
     deg = found.degree
+    if deg <= 1:
+        return _polynomial_formulas(system, found)
     chi, chi0 = sp.Symbol("chi", real=True), sp.Symbol("chi_0", real=True)
     ua, ub, uc, ud = sp.symbols("u_a u_b u_c u_d", real=True)
     lead = P.LC()
@@ -646,3 +648,30 @@ def solution_formulas(system: Any) -> dict:
                      f"d{name}/dt = {sp.sstr(sp.factor(N.as_expr() / D.as_expr()))} in partial fractions over its "
                      f"poles in u, integrated with Π(n; χ|m), n = (u_b − u_a)/(u_pole − u_a)")
     return out
+
+
+def _polynomial_formulas(system: Any, found: Any) -> dict:
+    """{name: (lhs, value, meaning)} for deg P ≤ 1: u = u₀ + u̇₀ (t − t₀) + (c₁/4)(t − t₀)² (ü = P'(u)/2 = c₁/2), and
+    each cyclic coordinate whose rate is a polynomial in u, c − c₀ = ∫ R(u) dt in t; no Jacobi functions (``m``,
+    ``kappa`` and ``t`` do not apply)."""
+    import sympy as sp
+
+    u, P = found.variable, found.polynomial
+    tau = sp.Symbol("t") - sp.Symbol("t_0")
+    s = sp.Symbol("s", real=True)
+    u0, v0 = sp.Symbol("u_0", real=True), sp.Symbol("udot_0", real=True)
+    c1 = P.as_expr().diff(u)  # a constant: P is linear
+    u_of_t = u0 + v0 * tau + c1 / 4 * tau**2
+    out = {"u": (sp.Symbol(str(u)), u_of_t,
+                 f"u = {found.name[4:]} in uniform (deg P = 0) or uniformly accelerated (deg P = 1) motion: ü = P'(u)/2; "
+                 "u_0 and udot_0 = ±√P(u_0) at t_0 (no Jacobi functions: m, κ do not apply)")}
+    for name, entry in system.cyclic_rates().items():
+        if isinstance(entry, str) or entry[1].degree() > 0:
+            continue
+        N, D = entry
+        rate = (N.as_expr() / D.as_expr()).subs(u, u_of_t.subs(tau, s))
+        c = sp.Symbol(name)
+        out[name] = (c - sp.Symbol(f"{name}_0"), sp.expand(sp.integrate(rate, (s, 0, tau))),
+                     f"d{name}/dt = {sp.sstr(N.as_expr() / D.as_expr())}, a polynomial in u, integrated in t")
+    return out
+

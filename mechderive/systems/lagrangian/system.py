@@ -596,7 +596,8 @@ class LagrangianSystem(System):
                 from ...errors import DerivationError
 
                 raise DerivationError(f"closed_form_{name}: no printable formula (a quartic's rates, a rate that is "
-                                      "not simple partial fractions over its poles, or not a rational function of u)")
+                                      "not simple partial fractions over its poles, or not a rational function of u; "
+                                      "for deg P ≤ 1, m, κ and t(χ) do not apply)")
             return found[name][part]
 
         return tuple(Derivation(f"closed_form_{n}", meanings.get(n, f"{n} − {n}₀ by partial fractions in u and "
