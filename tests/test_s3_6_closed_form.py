@@ -106,6 +106,36 @@ def test_cubic_unbounded_branch_with_negative_lead_is_the_mirror_image(u0, direc
     assert float(motion.interval[0]) == pytest.approx(-2.0, abs=1e-15) and motion.interval[1] < 0
 
 
+THROUGH_INFINITY = [
+    # P = x⁴/2 − x² + 0.2 (outside the humps of V = x²/2 − x⁴/4 at E = 0.1): roots ±0.476, ±1.332
+    ("u ≥ r4, outwards", 1.5, 1), ("u ≥ r4, inwards first", 1.5, -1), ("u ≤ r1, outwards", -1.5, -1),
+    ("u ≤ r1, inwards first", -1.5, 1), ("from r4", 1.3321398835112932, 0), ("far out", 3.0, 1),
+]
+
+
+@pytest.mark.parametrize("name, u0, direction", THROUGH_INFINITY, ids=[c[0] for c in THROUGH_INFINITY])
+def test_quartic_outside_its_roots_escapes_through_infinity(name, u0, direction):
+    """Four real roots, positive lead, u0 outside them: the Möbius form along the arc (r4, ∞, r1), its pole
+    w_p = −C/D inside (0, 1) reached at the escape times."""
+    coeffs = [0.5, 0.0, -1.0, 0.0, 0.2]
+    motion = elliptic_motion(coeffs, u0, direction)
+    before, after = motion.escape_times
+    t = np.linspace(0.0, 0.97 * after, 200)
+    ref, _ = _ode_reference(coeffs, u0, direction, t)
+    # DOP853's error grows towards the escape (measured ≲ 9e-13 of 1 + |u| at 0.97 t₊, u ~ 30)
+    assert np.max(np.abs(motion.u(t) - ref) / (1 + np.abs(ref))) <= 1e-10
+    # the escape time: ∫ du/√P from u0 out to ±∞ (and twice from the root to u0 when moving inwards first), 30 digits
+    from mpmath import inf, mp, mpf, quad, sqrt
+    with mp.workdps(30):
+        c = [mpf(x) for x in coeffs]
+        # the integrand's endpoint singularity at the root needs the root itself (the 40-digit one), not its double
+        root, out = motion.interval[0], np.sign(u0)
+        start = root if direction == 0 else mpf(u0)
+        f = lambda x: 1 / sqrt(abs(mp.polyval(c, x)))  # noqa: E731
+        back = 2 * abs(quad(f, [root, start])) if direction * out < 0 else 0
+        assert abs(after - float(abs(quad(f, [start, out * inf])) + back)) <= 1e-12 * after
+
+
 def test_rate_integral_by_partial_fractions_and_pi():
     coeffs = -2.0 * np.poly((-2.0, 0.2, 0.9))   # a spherical pendulum's kind of cubic, u = cos θ in (0.2, 0.9)
     motion = elliptic_motion(coeffs, 0.5, 1)
@@ -467,6 +497,28 @@ def test_cubic_with_one_real_root_as_a_scene_until_its_escape():
     # past the escape the closed form is refused with the time (auto then integrates, which stops there too)
     with pytest.raises(InvalidInputError, match="reaches infinity at t = 2.474"):
         run_scene(_scene(["x"], _ESCAPING, {}, init, t_end=3.0, samples=31, method="exact"))
+
+
+def test_escape_over_an_asymmetric_quartic_hump_as_a_scene():
+    """V = x²/2 − x³/10 − x⁴/4 (no u = q² reduction: a quartic in u = x) from outside its humps: auto takes the
+    closed form through ∞ up to near the escape, against integration; the outer root is x_min."""
+    lag, init = "x_dot**2/2 - x**2/2 + x**3/10 + x**4/4", dict(x=1.6, x_dot=-1.3)  # E = 0.077: four real roots
+    exact = run_scene(_scene(["x"], lag, {}, init, t_end=1.0, samples=101, summary=["x_min", "x_max"]))
+    integrated = run_scene(_scene(["x"], lag, {}, init, t_end=1.0, samples=101, method="integrate"))
+    details = exact.report["details"]["closed_form"]
+    assert exact.report["method"] == "exact", exact.report.get("note")
+    assert (details["degree"], details["motion"]) == (4, "unbounded: reaches infinity in finite time")
+    for q, column in exact.columns.items():
+        bound = 10 * (exact.report["error_estimate"] + integrated.report["error_estimate"]) + 1e-12
+        assert np.max(np.abs(column - integrated.columns[q])) <= bound * (1 + np.max(np.abs(column))), q
+    assert exact.report["summary"]["x_max"] is None
+    # at the turning point V(x_min) = E = ẋ0²/2 + V(x0), to the rounding of V's terms (~1)
+    x_min = exact.report["summary"]["x_min"]
+    assert 1.0 < x_min < 1.6 and abs(_V(x_min) - (1.3**2 / 2 + _V(1.6))) <= 1e-15
+
+
+def _V(x):
+    return x**2 / 2 - x**3 / 10 - x**4 / 4
 
 
 def test_the_unbounded_branch_of_a_real_cubic_is_refused_past_its_escape():

@@ -51,8 +51,11 @@ Where u reaches ∞ in finite time — the cubic's unbounded branch u ≥ r3 at 
 cubic at v = ±2K (cn = −1) — :attr:`EllipticMotion.escape_times` gives the two times around t = 0; beyond them
 the formulas continue through ∞ (u̇² = P(u) still holds) but describe no motion, and the caller refuses them.
 
+A quartic with four real roots and a positive lead, started outside them (u ≥ r4 or u ≤ r1), runs through ∞
+along the arc (r4, ∞, r1): the same Möbius form with its pole inside (0, 1), and a as the root on u0's side.
+
 Not covered (the caller integrates instead; :class:`NotElliptic` says why): a quartic with only complex
-roots or escaping through infinity, a cubic with a complex pair too near the real axis on its motion (1 − m <
+roots, or with two real roots and a positive lead (escaping through infinity in cn), a cubic with a complex pair too near the real axis on its motion (1 − m <
 1e-15), a quadratic with a double root or a complex pair too near the real axis to resolve at 40 digits, rates with poles in u on the degree ≤ 2 unbounded
 forms and any rate on the one-real-root cubic's cn form, an unstable equilibrium (a start on a double root with P'' > 0), the cyclic rates at
 m = 1, and rates with complex poles, poles on the motion, or a polynomial part of degree > 1 in w.
@@ -266,14 +269,25 @@ class EllipticMotion:
 
     @property
     def escape_times(self) -> tuple[float, float] | None:
-        """(t₋, t₊): where M(1) = ∞ (the cubic's unbounded branch u ≥ r3, B&F 238.00) u reaches ∞ at w = 1, i.e. at
-        v = ±K around the start (v_s in [−K, K]): a blow-up in finite time, before and after t = 0.  None where u
-        stays finite (a bounded motion, or m = 1 where ∞ is approached in infinite time)."""
+        """(t₋, t₊): where M has its pole on the motion u reaches ∞ in finite time, before and after t = 0 — at w = 1
+        (v = ±K) for the cubic's unbounded branch u ≥ r3 (B&F 238.00, M(1) = ∞), at w_p = −C/D inside (0, 1) for a
+        quartic with positive lead outside its roots.  None where u stays finite (a bounded motion, or m = 1 where
+        ∞ is approached in infinite time)."""
         mp = _mp()
-        if self.steady or self.asymptotic or not mp.isinf(self.interval[1]):
+        if self.steady or self.asymptotic:
             return None
+        A, B, C, D = self.mobius
         with mp.workdps(DPS):
-            return float((-self.K - self.v_start) / self.kappa), float((self.K - self.v_start) / self.kappa)
+            # the pole of M, C + D w_p = 0: in (0, 1] the motion reaches it (w_p = 1: the cubic's d = ∞ listing; inside:
+            # a quartic whose arc of motion runs through ∞, r4 → ∞ or r1 → −∞), at sn²(v) = w_p, v = ±v_p + 2Kn
+            if D == 0 or not 0 < -C / D <= 1:
+                return None
+            w_p = -C / D
+            v_p = self.K if w_p == 1 else mp.ellipf(mp.asin(mp.sqrt(w_p)), self.m)
+            v_s = self.v_start
+            ahead = v_p if v_p > v_s else 2 * self.K - v_p
+            behind = -v_p if -v_p < v_s else -2 * self.K + v_p
+            return float((behind - v_s) / self.kappa), float((ahead - v_s) / self.kappa)
 
     def u_mp(self, t) -> Any:
         """u(t) at the working precision (mpmath), as a reference for the doubles."""
@@ -302,6 +316,11 @@ class EllipticMotionCn(EllipticMotion):
 
     def minus(self, point: Any, t: Any, jac: tuple | None = None) -> np.ndarray:
         return self.u(t, jac) - float(point)
+
+    @property
+    def escape_times(self) -> None:
+        """None: u stays between its two real roots (the Möbius form here is in cn, not sn²)."""
+        return None
 
     def signed_root(self, end: str, t: Any, jac: tuple | None = None) -> tuple[np.ndarray, np.ndarray]:
         raise NotElliptic("expected no fold of the substitution on a quartic with complex roots (not covered)")
@@ -514,9 +533,11 @@ def _elliptic_motion(coefficients: Sequence, u0: Any, direction: int, dps: int) 
         if degree == 4 and (mp.isinf(a) or mp.isinf(b)):
             raise NotElliptic("expected a finite interval of motion")
         lo, hi = points[found], points[(found + 1) % count]
-        if degree == 4 and not mp.isinf(hi) and hi < lo:
-            raise NotElliptic("expected motion between two finite roots, got u passing through ∞ (a quartic whose "
-                              "motion goes through the point at infinity of u): not covered")
+        if degree == 4 and not mp.isinf(hi) and hi < lo and u0 <= hi + slack:
+            # the arc from r4 through ∞ to r1 (positive lead): the motion leaves from the root on u0's side and escapes
+            # to ∞ in finite time (a pole of M inside (0, 1): escape_times); a = that root, the listing reversed if
+            # u0 ≤ r1 (the same m)
+            a, b, cc, d = b, a, d, cc
         mob = _mobius(a, b, d)
         winv = _inverse(mob, cc)
         m = mp.mpf(0) if mp.isinf(winv) else 1 / winv

@@ -139,7 +139,8 @@ class ClosedMotion:
         a, b = motion.interval
         ends = []
         for end, value in (("a", a), ("b", b)):
-            if end == "b" and motion.asymptotic:  # approached, never reached: not a fold q passes through
+            if end == "b" and (motion.asymptotic or motion.escape_times is not None):
+                # approached, never reached (or beyond ∞, past the escape): not a fold q passes through
                 ends.append(None)
                 continue
             fold = None if mp.isinf(value) else self.shape.fold_point(float(value), q0)
@@ -173,13 +174,13 @@ class ClosedMotion:
             self.kind = "steady"
         elif motion.asymptotic and np.isfinite(float(b)):
             self.kind = "separatrix: towards an unstable equilibrium"
+        elif motion.escape_times is not None:
+            self.kind = "unbounded: reaches infinity in finite time"
         elif np.isfinite(float(b)):
             self.kind = "oscillation between turning points"
         elif elementary:
             self.kind = {"polynomial": "unbounded: uniformly accelerated" if motion.degree == 1 else
                          "unbounded: uniform motion", "exponential": "unbounded: no turning point"}[motion.form]
-        elif motion.escape_times is not None:
-            self.kind = "unbounded: reaches infinity in finite time"
         else:
             self.kind = "unbounded"
         if found.name == "u = 1/q" and float(min(a, b)) <= 0 <= float(max(a, b)):
