@@ -136,6 +136,19 @@ def test_quartic_outside_its_roots_escapes_through_infinity(name, u0, direction)
         assert abs(after - float(abs(quad(f, [start, out * inf])) + back)) <= 1e-12 * after
 
 
+def test_escape_through_infinity_agrees_with_the_cubic_of_u_equal_x_squared():
+    """The symmetric hump two ways: ẋ² = x⁴/2 − x² + 0.2 (the quartic's arc through ∞) and, with w = x²,
+    ẇ² = 4w(w²/2 − w + 0.2) (the cubic's branch w ≥ r3, B&F 238.00): the same escape times and the same x(t)."""
+    for x0, direction in ((1.5, 1), (1.5, -1)):
+        quartic = elliptic_motion([0.5, 0.0, -1.0, 0.0, 0.2], x0, direction)
+        cubic = elliptic_motion([2.0, -4.0, 0.8, 0.0], x0**2, direction)
+        # two independent constants (Möbius with an interior pole; affine in sn²), each rounded once: ~1e-15
+        assert np.allclose(quartic.escape_times, cubic.escape_times, rtol=1e-14, atol=0)
+        t = np.linspace(0.0, 0.97 * quartic.escape_times[1], 101)
+        # near the escape both lose digits as the pole's conditioning, ~ulp(v)/(v_p − v): measured 1e-13 at 0.97 t₊
+        assert np.max(np.abs(quartic.u(t) - np.sqrt(cubic.u(t))) / quartic.u(t)) <= 1e-12
+
+
 def test_rate_integral_by_partial_fractions_and_pi():
     coeffs = -2.0 * np.poly((-2.0, 0.2, 0.9))   # a spherical pendulum's kind of cubic, u = cos θ in (0.2, 0.9)
     motion = elliptic_motion(coeffs, 0.5, 1)
