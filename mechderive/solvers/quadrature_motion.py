@@ -54,8 +54,11 @@ the formulas continue through ∞ (u̇² = P(u) still holds) but describe no mot
 A quartic with four real roots and a positive lead, started outside them (u ≥ r4 or u ≤ r1), runs through ∞
 along the arc (r4, ∞, r1): the same Möbius form with its pole inside (0, 1), and a as the root on u0's side.
 
+With two real roots, a complex pair and a positive lead, u outside the real roots escapes in cn
+(:func:`~.quadrature_open.complex_pair_quartic_outside`, B&F 260.00).
+
 Not covered (the caller integrates instead; :class:`NotElliptic` says why): a quartic with only complex
-roots, or with two real roots and a positive lead (escaping through infinity in cn), a cubic with a complex pair too near the real axis on its motion (1 − m <
+roots (no turning point: u passes every value, escaping both ways), a cubic with a complex pair too near the real axis on its motion (1 − m <
 1e-15), a quadratic with a double root or a complex pair too near the real axis to resolve at 40 digits, rates with poles in u on the degree ≤ 2 unbounded
 forms and any rate on the one-real-root cubic's cn form, an unstable equilibrium (a start on a double root with P'' > 0), the cyclic rates at
 m = 1, and rates with complex poles, poles on the motion, or a polynomial part of degree > 1 in w.
@@ -343,9 +346,10 @@ class EllipticMotionCn(EllipticMotion):
 def _complex_pair_quartic(c: list, roots: list, u0: Any, direction: int) -> EllipticMotion:
     """The :class:`EllipticMotionCn` of a quartic with two real roots and a complex pair (see there)."""
     mp = _mp()
-    if c[0] > 0:
-        raise NotElliptic("expected a bounded motion, got a quartic with two real roots and positive leading "
-                          "coefficient: u escapes through infinity (not covered)")
+    if c[0] > 0:  # outside the real roots, escaping through ∞ (quadrature_open)
+        from .quadrature_open import complex_pair_quartic_outside
+
+        return complex_pair_quartic_outside(c, roots, u0, direction)
     a, b = roots
     if not a - mp.mpf(2) ** -40 * (1 + abs(u0)) <= u0 <= b + mp.mpf(2) ** -40 * (1 + abs(u0)):
         raise NotElliptic(f"expected the start between the real roots {mp.nstr(a, 10)} and {mp.nstr(b, 10)}, "

@@ -34,6 +34,9 @@ A cyclic coordinate's rate ċ = R(u) that is a polynomial in u integrates in clo
 E = e^{κt}, it is Σ_j C_j E^j (j = −deg R … deg R), and ∫₀^t = C_0 t + Σ_{j≠0} C_j (e^{jκt} − 1)/(jκ) — a
 projectile's horizontal coordinate, ẏ = p_y − w x with a magnetic-like coupling.
 
+* **a quartic with two real roots, a complex pair and a positive lead**, u outside the real roots: from the root on
+  u0's side out to ∞ in cn (:func:`complex_pair_quartic_outside`, B&F 260.00), escaping in finite time.
+
 Not covered here: a quadratic with a double real root (u − α ∝ e^{±κt}); rates with poles in u (a rational R,
 which the motion may pass) on these forms, and any rate on the cubic's cn form.
 """
@@ -47,7 +50,8 @@ import numpy as np
 
 from .quadrature_motion import DPS, EllipticMotionCn, NotElliptic, _mp, _split_mp
 
-__all__ = ["ElementaryMotion", "EllipticMotionCubicPair", "ElementaryRate", "open_motion", "elementary_rate_integral"]
+__all__ = ["ElementaryMotion", "EllipticMotionCubicPair", "EllipticMotionCnEscape", "ElementaryRate", "open_motion",
+           "elementary_rate_integral", "complex_pair_quartic_outside"]
 
 
 @dataclass
@@ -203,6 +207,72 @@ class EllipticMotionCubicPair(EllipticMotionCn):
         with mp.workdps(DPS):
             v = self.kappa * mp.mpf(t) + self.v_start
             return self.mp_u(*(mp.ellipfun(f, v, m=self.m) for f in ("sn", "cn", "dn")))
+
+
+class EllipticMotionCnEscape(EllipticMotionCn):
+    """u = (A + B cn v)/(C + D cn v) for a quartic with two real roots, a complex pair and a positive lead, u outside
+    the real roots (see :func:`complex_pair_quartic_outside`): from the root e on u0's side (cn = 1) out to ∞, which
+    it reaches at the pole cn_p = −C/D, v = ±v_p (:attr:`escape_times`)."""
+
+    @property
+    def escape_times(self) -> tuple[float, float]:
+        mp = _mp()
+        A, B, C, D = self.mobius
+        with mp.workdps(DPS):
+            v_p = mp.ellipf(mp.acos(-C / D), self.m)  # in (0, 2K); v_s in (−v_p, v_p)
+            return float((-v_p - self.v_start) / self.kappa), float((v_p - self.v_start) / self.kappa)
+
+
+def complex_pair_quartic_outside(c: list, roots: list, u0: Any, direction: int) -> EllipticMotionCnEscape:
+    """P = c4 (u − a)(u − b)((u − α)² + β²), c4 > 0, u0 outside [a, b]: with e the real root on u0's side, f the other,
+    E = |e − z|, F = |f − z| (z = α + iβ),
+
+        u = (eF − fE + (eF + fE) cn v)/(F − E + (F + E) cn v),   m = ((E + F)² − (e − f)²)/(4EF),   κ² = c4 E F,
+
+    u = e at cn = 1, f at cn = −1 and ∞ between, at cn_p = −(F − E)/(F + E): the bounded form of Byrd & Friedman
+    259.00 with one distance's sign turned, which moves the pole of the Möbius map onto the arc from e through ∞
+    to f (B&F 260.00).  m and κ² are checked against P at two values of cn (the ratio κ² = P/(du/dv)² must be
+    constant), and u(t) in the tests against DOP853."""
+    mp = _mp()
+    a, b = roots
+    slack = mp.mpf(2) ** -40 * (1 + abs(u0))
+    if u0 >= b - slack:
+        e, f = b, a
+    elif u0 <= a + slack:
+        e, f = a, b
+    else:
+        raise NotElliptic(f"expected u̇² = P(u0) ≥ 0, got u0 = {mp.nstr(u0, 10)} between the real roots, where P < 0")
+    pair = [z for z in mp.polyroots(c, maxsteps=400, extraprec=6 * mp.mp.dps) if abs(mp.im(z)) > 0]
+    alpha, beta = mp.re(pair[0]), abs(mp.im(pair[0]))
+    E, F = mp.sqrt((e - alpha) ** 2 + beta**2), mp.sqrt((f - alpha) ** 2 + beta**2)
+    m = ((E + F) ** 2 - (e - f) ** 2) / (4 * E * F)
+    m1 = ((e - f) ** 2 - (E - F) ** 2) / (4 * E * F)
+    k2 = c[0] * E * F
+    A, B, C, D = e * F - f * E, e * F + f * E, F - E, F + E
+    P = lambda x: mp.polyval(c, x)  # noqa: E731
+
+    def kappa_sq(cn):
+        du = (B * C - A * D) / (C + D * cn) ** 2
+        return P((A + B * cn) / (C + D * cn)) / (du**2 * (1 - cn * cn) * (m1 + m * cn * cn))
+
+    for cn in (mp.mpf(9) / 10, mp.mpf(1) / 3):
+        if not 0 < m < 1 or abs(kappa_sq(cn) - k2) > mp.mpf(10) ** -8 * abs(k2):
+            raise NotElliptic(f"expected the cn form to fit the quartic (κ² constant), got {mp.nstr(k2, 8)} and "
+                              f"{mp.nstr(kappa_sq(cn), 8)}: an inconsistent root configuration")
+    if m1 < mp.mpf(10) ** -15:
+        raise NotElliptic(f"expected the complex pair away from the motion, got 1 − m = {mp.nstr(m1, 3)}: a nearly "
+                          "double root, not covered")
+    kappa = mp.sqrt(k2)
+    K = mp.ellipk(m)
+    # cn0 from the inverse Möbius map; acos as 2 asin √((1 − cn0)/2), which keeps its digits at the root (cn0 → 1)
+    cn0 = min(max((A - C * u0) / (D * u0 - B), mp.mpf(-1)), mp.mpf(1))
+    one_minus = (C + D) * (u0 - e) / (D * u0 - B)  # 1 − cn0 without cancellation: ((C + D)u0 − (A + B))/(D u0 − B)
+    v0 = mp.ellipf(2 * mp.asin(mp.sqrt(max(min(one_minus / 2, mp.mpf(1)), mp.mpf(0)))), m)
+    rising = -(B * C - A * D) > 0  # du/dv = −det sn dn/(C + D cn)² on (0, 2K)
+    v_start = mp.mpf(0) if direction == 0 else (v0 if (direction > 0) == rising else -v0)
+    del cn0
+    return EllipticMotionCnEscape(tuple(c), (e, f), (e, f, mp.mpf("nan"), mp.mpf("nan")), (A, B, C, D), m, m1, kappa,
+                                  v_start, K, mp.inf, 4)
 
 
 def open_motion(c: list, roots: list, u0: Any, direction: int) -> Any:
