@@ -183,6 +183,62 @@ def test_quartic_with_a_complex_pair_escapes_outside_its_real_roots(name, lead, 
     assert np.max(np.abs(u_dot**2 - np.polyval(coeffs, u)) / (1 + np.abs(np.polyval(coeffs, u)))) <= 1e-13
 
 
+TWO_PAIRS = [
+    # (name, lead, z1, z2, u0, direction): P = lead |u − z1|² |u − z2|² > 0 everywhere
+    ("upwards", 1.0, complex(0.5, 1.0), complex(-1.0, 0.7), 0.3, 1),
+    ("downwards", 1.0, complex(0.5, 1.0), complex(-1.0, 0.7), 0.3, -1),
+    ("from far below", 1.0, complex(0.5, 1.0), complex(-1.0, 0.7), -3.0, 1),
+    ("one pair twice (m = 0)", 2.0, complex(0.0, 1.0), complex(0.0, 1.0), 0.3, 1),
+    ("a narrow pair passed, m near 1", 0.5, complex(1.0, 2.0), complex(-2.0, 0.3), 4.0, -1),
+]
+
+
+@pytest.mark.parametrize("name, lead, z1, z2, u0, direction", TWO_PAIRS, ids=[c[0] for c in TWO_PAIRS])
+def test_quartic_with_no_real_root_passes_every_value(name, lead, z1, z2, u0, direction):
+    """u = α1 + b tan(φ0 + am(κt + v_s)) (derived in quadrature_open.two_pair_quartic): from −∞ to ∞ in the finite
+    time between its escapes."""
+    coeffs = lead * np.real(np.poly([z1, z1.conjugate(), z2, z2.conjugate()]))
+    motion = elliptic_motion(coeffs, u0, direction)
+    before, after = motion.escape_times
+    t = np.linspace(0.0, 0.97 * after, 200)
+    ref, _ = _ode_reference(coeffs, u0, direction, t)
+    # DOP853's error grows over the long excursion through every value (measured ≲ 4e-11 of 1 + |u|)
+    assert np.max(np.abs(motion.u(t) - ref) / (1 + np.abs(ref))) <= 1e-9
+    # the escape times against ∫ du/√P from u0 to ±∞, split at the pairs' centres (a narrow pair is a near-singularity
+    # of the integrand mpmath's quadrature must be shown)
+    from mpmath import inf, mp, mpf, quad, sqrt
+    with mp.workdps(30):
+        c = [mpf(x) for x in coeffs]
+        f = lambda x: 1 / sqrt(mp.polyval(c, x))  # noqa: E731
+
+        def time_to(end):
+            inner = sorted({z1.real, z2.real, u0})
+            points = [mpf(x) for x in inner if min(u0, end) <= x <= max(u0, end)]
+            return abs(quad(f, sorted(points + [end])))
+
+        assert abs(after - float(time_to(direction * inf))) <= 1e-12 * after
+        assert abs(-before - float(time_to(-direction * inf))) <= 1e-12 * abs(before)
+    u, u_dot = motion.u(t), motion.u_dot(t)
+    assert np.max(np.abs(u_dot**2 - np.polyval(coeffs, u)) / (1 + np.polyval(coeffs, u))) <= 1e-13
+    assert motion.interval[0] == -np.inf  # no turning point
+
+
+def test_over_a_quartic_hill_as_a_scene():
+    """V = −x²/2 − x³/10 − x⁴/4 with E > 0: P has no real root; auto takes the tan form up to near the escape
+    (t₊ ≈ 1.888), against integration."""
+    lag, init = "x_dot**2/2 + x**4/4 + x**3/10 + x**2/2", dict(x=0.0, x_dot=1.0)
+    exact = run_scene(_scene(["x"], lag, {}, init, t_end=1.7, samples=171, summary=["x_min", "period"]))
+    integrated = run_scene(_scene(["x"], lag, {}, init, t_end=1.7, samples=171, method="integrate"))
+    details = exact.report["details"]["closed_form"]
+    assert exact.report["method"] == "exact", exact.report.get("note")
+    assert (details["degree"], details["motion"]) == (4, "unbounded: reaches infinity in finite time")
+    assert details["escape_times"][1] == pytest.approx(1.8878626694, rel=1e-10)
+    for q, column in exact.columns.items():
+        bound = 10 * (exact.report["error_estimate"] + integrated.report["error_estimate"]) + 1e-12
+        assert np.max(np.abs(column - integrated.columns[q])) <= bound * (1 + np.max(np.abs(column))), q
+    assert exact.report["summary"]["x_min"] is None and exact.report["summary"]["period"] is None
+
+
 def test_rate_integral_by_partial_fractions_and_pi():
     coeffs = -2.0 * np.poly((-2.0, 0.2, 0.9))   # a spherical pendulum's kind of cubic, u = cos θ in (0.2, 0.9)
     motion = elliptic_motion(coeffs, 0.5, 1)
@@ -215,7 +271,7 @@ def test_rate_with_a_polynomial_part_integrates_with_legendre_e():
 
 
 def test_configurations_not_covered_are_refused_with_the_reason():
-    with pytest.raises(NotElliptic, match="complex roots"):
+    with pytest.raises(NotElliptic, match="P < 0 everywhere"):
         elliptic_motion([-1.0, 0.0, -2.0, 0.0, -1.0], 0.0, 1)  # −(u² + 1)²: no real root
     with pytest.raises(NotElliptic, match="double root"):
         elliptic_motion(np.poly((0.0, 1.0, 1.0)), 1.0, 0)  # on the double root, P'' > 0: unstable equilibrium

@@ -55,10 +55,10 @@ A quartic with four real roots and a positive lead, started outside them (u ≥ 
 along the arc (r4, ∞, r1): the same Möbius form with its pole inside (0, 1), and a as the root on u0's side.
 
 With two real roots, a complex pair and a positive lead, u outside the real roots escapes in cn
-(:func:`~.quadrature_open.complex_pair_quartic_outside`, B&F 260.00).
+(:func:`~.quadrature_open.complex_pair_quartic_outside`, B&F 260.00); with no real root (two complex pairs, positive
+lead) u passes every value, u = α1 + b tan(φ0 + am v) (:func:`~.quadrature_open.two_pair_quartic`).
 
-Not covered (the caller integrates instead; :class:`NotElliptic` says why): a quartic with only complex
-roots (no turning point: u passes every value, escaping both ways), a cubic with a complex pair too near the real axis on its motion (1 − m <
+Not covered (the caller integrates instead; :class:`NotElliptic` says why): a cubic with a complex pair too near the real axis on its motion (1 − m <
 1e-15), a quadratic with a double root or a complex pair too near the real axis to resolve at 40 digits, rates with poles in u on the degree ≤ 2 unbounded
 forms and any rate on the one-real-root cubic's cn form, an unstable equilibrium (a start on a double root with P'' > 0), the cyclic rates at
 m = 1, and rates with complex poles, poles on the motion, or a polynomial part of degree > 1 in w.
@@ -451,7 +451,7 @@ def _elliptic_motion(coefficients: Sequence, u0: Any, direction: int, dps: int) 
             return open_motion(c, [], u0, direction)
         P = lambda x: mp.polyval(c, x)  # noqa: E731
         roots = _real_roots(c)
-        if degree == 2 and not roots or degree == 3 and len(roots) == 1:
+        if degree == 2 and not roots or degree == 3 and len(roots) == 1 or degree == 4 and not roots:
             # no turning point: u = α + β sinh(κt + v_s); or one, and an escape to ∞ in cn (quadrature_open)
             from .quadrature_open import open_motion
 

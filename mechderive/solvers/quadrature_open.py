@@ -1,5 +1,6 @@
-"""The motions of u̇² = P(u) that do not oscillate (issue 16): degree ≤ 1, the quadratic with no real root, and
-the cubic with one real root — closed forms in t that are polynomial, exponential or Jacobian.
+"""The motions of u̇² = P(u) that do not oscillate (issue 16): degree ≤ 1, the quadratic with no real root, the
+cubic with one real root and the quartics escaping through ∞ with complex roots — closed forms in t that are
+polynomial, exponential or Jacobian.
 
 The periodic and asymptotic motions are :mod:`mechderive.solvers.quadrature_motion`'s; it hands these here.
 Each form below is derived from ü = P'(u)/2 (the derivative of u̇² = P(u) divided by 2u̇) and checked in the tests
@@ -36,6 +37,9 @@ projectile's horizontal coordinate, ẏ = p_y − w x with a magnetic-like coupl
 
 * **a quartic with two real roots, a complex pair and a positive lead**, u outside the real roots: from the root on
   u0's side out to ∞ in cn (:func:`complex_pair_quartic_outside`, B&F 260.00), escaping in finite time.
+* **a quartic with no real root** (two complex pairs, positive lead): u = α1 + b tan(φ0 + am(κt + v_s)) from
+  u = α1 + b tan φ, which turns dt = du/√P into dψ/(κ√(1 − m sin²ψ)) (:func:`two_pair_quartic`); u passes every
+  value between its escapes to −∞ and +∞.
 
 Not covered here: a quadratic with a double real root (u − α ∝ e^{±κt}); rates with poles in u (a rational R,
 which the motion may pass) on these forms, and any rate on the cubic's cn form.
@@ -51,7 +55,7 @@ import numpy as np
 from .quadrature_motion import DPS, EllipticMotionCn, NotElliptic, _mp, _split_mp
 
 __all__ = ["ElementaryMotion", "EllipticMotionCubicPair", "EllipticMotionCnEscape", "ElementaryRate", "open_motion",
-           "elementary_rate_integral", "complex_pair_quartic_outside"]
+           "elementary_rate_integral", "complex_pair_quartic_outside", "EllipticMotionTan", "two_pair_quartic"]
 
 
 @dataclass
@@ -275,6 +279,104 @@ def complex_pair_quartic_outside(c: list, roots: list, u0: Any, direction: int) 
                                   v_start, K, mp.inf, 4)
 
 
+class EllipticMotionTan(EllipticMotionCn):
+    """u = α1 + b tan(φ0 + am v) for a quartic with two complex pairs and a positive lead (see
+    :func:`two_pair_quartic`), written from sn and cn: tan(φ0 + am v) = (s0 cn + c0 sn)/(c0 cn − s0 sn) with
+    (s0, c0) = (sin φ0, cos φ0) — ``mobius`` = (α1, b, s0, c0).  u passes every value and is infinite where
+    φ0 + am v = ±π/2 (:attr:`escape_times`)."""
+
+    def _tan_parts(self) -> tuple[float, float, float, float]:
+        if "tan" not in self._f:
+            with _mp().workdps(DPS):
+                self._f["tan"] = tuple(float(x) for x in self.mobius)
+        return self._f["tan"]
+
+    def u(self, t: Any, jac: tuple | None = None) -> np.ndarray:
+        sn, cn, dn, _, _ = self.jacobi(t) if jac is None else jac
+        alpha, b, s0, c0 = self._tan_parts()
+        with np.errstate(all="ignore"):
+            return alpha + b * (s0 * cn + c0 * sn) / (c0 * cn - s0 * sn)
+
+    def u_dot(self, t: Any, jac: tuple | None = None) -> np.ndarray:
+        """u̇ = b κ dn / cos²(φ0 + am v) (d am/dv = dn), cos(φ0 + am v) = c0 cn − s0 sn."""
+        sn, cn, dn, _, _ = self.jacobi(t) if jac is None else jac
+        alpha, b, s0, c0 = self._tan_parts()
+        with np.errstate(all="ignore"):
+            return b * float(self.kappa) * dn / (c0 * cn - s0 * sn) ** 2
+
+    def minus(self, point: Any, t: Any, jac: tuple | None = None) -> np.ndarray:
+        return self.u(t, jac) - float(point)
+
+    def mp_u(self, sn, cn, dn) -> Any:
+        alpha, b, s0, c0 = self.mobius
+        return alpha + b * (s0 * cn + c0 * sn) / (c0 * cn - s0 * sn)
+
+    def mp_u_dot(self, sn, cn, dn) -> Any:
+        alpha, b, s0, c0 = self.mobius
+        return b * self.kappa * dn / (c0 * cn - s0 * sn) ** 2
+
+    def u_mp(self, t) -> Any:
+        mp = _mp()
+        with mp.workdps(DPS):
+            v = self.kappa * mp.mpf(t) + self.v_start
+            return self.mp_u(*(mp.ellipfun(f, v, m=self.m) for f in ("sn", "cn", "dn")))
+
+    @property
+    def escape_times(self) -> tuple[float, float]:
+        """am v = ±π/2 − φ0 around the start: v = F(±π/2 − φ0 | m) (F of any real amplitude)."""
+        mp = _mp()
+        alpha, b, s0, c0 = self.mobius
+        with mp.workdps(DPS):
+            phi0 = mp.atan2(s0, c0)
+            ahead, behind = (mp.ellipf(x - phi0, self.m) for x in (mp.pi / 2, -mp.pi / 2))
+            return float((behind - self.v_start) / self.kappa), float((ahead - self.v_start) / self.kappa)
+
+
+def two_pair_quartic(c: list, u0: Any, direction: int) -> EllipticMotionTan:
+    """P = c4 ((u − α1)² + β1²)((u − α2)² + β2²), c4 > 0: no real root, u passes every value and reaches ±∞ in finite
+    time.  Derivation: with u = α1 + b tan φ (b = ±β1 by the direction, so that φ grows with t),
+    (u − α1)² + β1² = β1² sec²φ and du = b sec²φ dφ, so
+
+        dt = du/(d·√P) = dφ / (√c4 √Q(φ)),   Q(φ) = ((α1 − α2) cos φ + b sin φ)² + β2² cos²φ,
+
+    a positive quadratic form A cos²φ + 2B sin φ cos φ + C sin²φ (A = (α1 − α2)² + β2², B = (α1 − α2) b, C = β1²)
+    = λ1 cos²ψ + λ2 sin²ψ with ψ = φ − φ0, 2φ0 = atan2(B, (A − C)/2), λ1,2 = (A + C)/2 ± R, R = √(((A − C)/2)² + B²),
+    λ2 = β1²β2²/λ1.  Hence κ t = F(ψ|m) − F(ψ_s|m) with m = 2R/λ1, 1 − m = λ2/λ1, κ² = c4 λ1: ψ = am(κt + v_s),
+    u = α1 + b tan(φ0 + am(κt + v_s)).  Checked in the tests against DOP853 and ∫du/√P.
+    """
+    mp = _mp()
+    pairs = sorted((z for z in mp.polyroots(c, maxsteps=400, extraprec=6 * mp.mp.dps) if mp.im(z) > 0),
+                   key=lambda z: -mp.im(z))
+    if len(pairs) != 2:
+        raise NotElliptic(f"expected two complex pairs of roots, got {len(pairs)}: an inconsistent configuration")
+    (alpha1, beta1), (alpha2, beta2) = ((mp.re(z), mp.im(z)) for z in pairs)
+    if direction == 0:
+        raise NotElliptic("expected u̇0 ≠ 0 where P has no real root (u̇² = P > 0 everywhere), got 0")
+    b = direction * beta1
+    A, B, C = (alpha1 - alpha2) ** 2 + beta2**2, (alpha1 - alpha2) * b, beta1**2
+    R = mp.sqrt(((A - C) / 2) ** 2 + B**2)
+    lam1 = (A + C) / 2 + R
+    m, m1 = 2 * R / lam1, (beta1 * beta2 / lam1) ** 2
+    if m1 < mp.mpf(10) ** -15:
+        raise NotElliptic(f"expected complex pairs away from the real axis, got 1 − m = {mp.nstr(m1, 3)}: a nearly "
+                          "double root the motion passes, not covered")
+    phi0 = mp.atan2(B, (A - C) / 2) / 2
+    kappa = mp.sqrt(c[0] * lam1)
+    # the check of the derivation: κ² = P/(du/dv)² at two phases (du/dv = b dn / cos²(φ0 + am v))
+    for v in (mp.mpf(1) / 3, -mp.mpf(7) / 10):
+        sn, cn, dn = (mp.ellipfun(f, v, m=m) for f in ("sn", "cn", "dn"))
+        cos = mp.cos(phi0) * cn - mp.sin(phi0) * sn
+        u = alpha1 + b * (mp.sin(phi0) * cn + mp.cos(phi0) * sn) / cos
+        ratio = mp.polyval(c, u) / (b * dn / cos**2) ** 2
+        if abs(ratio - kappa**2) > mp.mpf(10) ** -8 * kappa**2:
+            raise NotElliptic(f"expected the tan form to fit the quartic (κ² constant), got {mp.nstr(kappa**2, 8)} and "
+                              f"{mp.nstr(ratio, 8)}: an inconsistent root configuration")
+    phi_start = mp.atan((u0 - alpha1) / b)
+    v_start = mp.ellipf(phi_start - phi0, m)
+    return EllipticMotionTan(tuple(c), (-mp.inf, mp.inf), (mp.mpf("nan"),) * 4, (alpha1, b, mp.sin(phi0), mp.cos(phi0)),
+                             m, m1, kappa, v_start, mp.ellipk(m), mp.inf, 4)
+
+
 def open_motion(c: list, roots: list, u0: Any, direction: int) -> Any:
     """The motion of u̇² = P(u) (``c`` P's coefficients, highest first, leading one nonzero unless P ≡ 0; ``roots``
     its real roots) for the configurations of the module docstring, at the caller's working precision; raises
@@ -289,6 +391,10 @@ def open_motion(c: list, roots: list, u0: Any, direction: int) -> Any:
         return _exponential(c, u0, direction)
     if degree == 3 and len(roots) == 1:
         return _cubic_complex_pair(c, roots[0], u0, direction)
+    if degree == 4 and not roots:
+        if c[0] < 0:
+            raise NotElliptic(f"expected u̇² = P(u0) ≥ 0, got a quartic P < 0 everywhere (u0 = {mp.nstr(u0, 10)})")
+        return two_pair_quartic(c, u0, direction)
     raise NotElliptic(f"expected a configuration of degree ≤ 1, a quadratic with no real root or a cubic with one, "
                       f"got degree {degree} with {len(roots)} real roots")
 
