@@ -566,6 +566,20 @@ def test_cubic_with_one_real_root_satisfies_the_quadrature_symbolically():
     assert sp.simplify(sp.expand(c3 * A * du_dv_sq - P)) == 0
 
 
+def test_quartics_with_a_pair_near_the_motion_are_refused():
+    # P = (u² + 1)((u − 2)² + 1e-20): u passes the nearly double root 2 ± 1e-10 i (1 − m ~ 1e-20)
+    with pytest.raises(NotElliptic, match="nearly double root"):
+        elliptic_motion(["1", "-4", "5.00000000000000000001", "-4", "4.00000000000000000001"], 0.0, 1)
+    # P = (u + 1)(u − 3)((u − 5)² + 1e-20), u ≥ 3 passing 5 ± 1e-10 i
+    coeffs = np.poly([-1.0, 3.0]).tolist()
+    import mpmath
+    with mpmath.workdps(40):
+        quad_pair = [mpmath.mpf(1), mpmath.mpf(-10), mpmath.mpf(25) + mpmath.mpf("1e-20")]
+        p = [sum(coeffs[i] * quad_pair[j - i] for i in range(3) if 0 <= j - i < 3) for j in range(5)]
+        with pytest.raises(NotElliptic, match="nearly double root"):
+            elliptic_motion([mpmath.nstr(x, 40) for x in p], 3.5, 1)
+
+
 def test_cubic_with_a_pair_near_the_motion_is_refused():
     # P = u((u − 1)² + 1e-18): the motion u ≥ 0 passes the nearly double root at u = 1, 1 − m ≈ 2.5e-19
     with pytest.raises(NotElliptic, match="nearly double root the motion passes"):
