@@ -40,28 +40,26 @@ is not reduced (K = ∞).
 
 Degree ≤ 1 — uniform motion (a free particle, a free rotor) and uniformly accelerated motion (a body under
 uniform gravity), u = u0 + u̇0 t + (c1/4) t² —, the quadratic with no real root, u = α + β sinh(κt + v_s)
-(no turning point: over the top of an inverted parabola), and the cubic with one real root r, u = r +
-σA(1 − cn)/(1 + cn) (from r out to ∞, reached in finite time) are solved in
-:mod:`mechderive.solvers.quadrature_open`, to which :func:`elliptic_motion` hands them.
-
-A cyclic rate ċ = R(u) polynomial in u integrates on the degree ≤ 1 and exponential forms to a polynomial in t
-or a sum of e^{jκt} (:func:`rate_integral` hands them to :func:`~.quadrature_open.elementary_rate_integral`).
-
-Where u reaches ∞ in finite time — the cubic's unbounded branch u ≥ r3 at v = ±K (w = 1), the one-real-root
-cubic at v = ±2K (cn = −1) — :attr:`EllipticMotion.escape_times` gives the two times around t = 0; beyond them
-the formulas continue through ∞ (u̇² = P(u) still holds) but describe no motion, and the caller refuses them.
+(no turning point: over the top of an inverted parabola), the cubic with one real root r, u = r +
+σA(1 − cn)/(1 + cn) (from r out to ∞, reached in finite time), the quartic with two real roots, a complex pair
+and a positive lead outside its real roots (in cn, B&F 260.00) and the quartic with no real root, u = α1 +
+b tan(φ0 + am v), are solved in :mod:`mechderive.solvers.quadrature_open`, to which :func:`elliptic_motion` hands
+them.  A cyclic rate ċ = R(u) polynomial in u integrates on the degree ≤ 1 and exponential forms to a polynomial
+in t or a sum of e^{jκt} (:func:`rate_integral` hands them to :func:`~.quadrature_open.elementary_rate_integral`).
 
 A quartic with four real roots and a positive lead, started outside them (u ≥ r4 or u ≤ r1), runs through ∞
-along the arc (r4, ∞, r1): the same Möbius form with its pole inside (0, 1), and a as the root on u0's side.
+along the arc (r4, ∞, r1): the Möbius form above with its pole inside (0, 1), a the root on u0's side.
 
-With two real roots, a complex pair and a positive lead, u outside the real roots escapes in cn
-(:func:`~.quadrature_open.complex_pair_quartic_outside`, B&F 260.00); with no real root (two complex pairs, positive
-lead) u passes every value, u = α1 + b tan(φ0 + am v) (:func:`~.quadrature_open.two_pair_quartic`).
+Where u reaches ∞ in finite time — the cubic's unbounded branch u ≥ r3 at v = ±K (w = 1), the quartic's arc
+through ∞ at its pole, the cn and tan forms at theirs — ``escape_times`` gives the two times around t = 0;
+beyond them the formulas continue through ∞ (u̇² = P(u) still holds) but describe no motion, and the caller
+refuses them.
 
-Not covered (the caller integrates instead; :class:`NotElliptic` says why): a cubic with a complex pair too near the real axis on its motion (1 − m <
-1e-15), a quadratic with a double root or a complex pair too near the real axis to resolve at 40 digits, rates with poles in u on the degree ≤ 2 unbounded
-forms and any rate on the one-real-root cubic's cn form, an unstable equilibrium (a start on a double root with P'' > 0), the cyclic rates at
-m = 1, and rates with complex poles, poles on the motion, or a polynomial part of degree > 1 in w.
+Not covered (the caller integrates instead; :class:`NotElliptic` says why): a complex pair so near the real
+axis on the motion that 1 − m < 1e-15 (a nearly double root the motion passes slowly), a quadratic with a
+double root or a complex pair too near the real axis to resolve at 40 digits, an unstable equilibrium (a start
+on a double root with P'' > 0), the cyclic rates at m = 1, on the cn and tan forms and with poles on the
+elementary forms, and rates with complex poles, poles on the motion, or a polynomial part of degree > 1 in w.
 """
 
 from __future__ import annotations

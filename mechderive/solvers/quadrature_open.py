@@ -30,19 +30,19 @@ against DOP853 on that equation:
   (:attr:`~mechderive.solvers.quadrature_motion.EllipticMotion.escape_times`), and the closed form refuses times
   beyond, as for the cubic's real-root branch u ≥ r3.
 
-A cyclic coordinate's rate ċ = R(u) that is a polynomial in u integrates in closed form on the first two
-(:func:`elementary_rate_integral`): on u = u0 + s t + a t², R(u(t)) is a polynomial in t; on u = α + p₊E + p₋/E,
-E = e^{κt}, it is Σ_j C_j E^j (j = −deg R … deg R), and ∫₀^t = C_0 t + Σ_{j≠0} C_j (e^{jκt} − 1)/(jκ) — a
-projectile's horizontal coordinate, ẏ = p_y − w x with a magnetic-like coupling.
-
 * **a quartic with two real roots, a complex pair and a positive lead**, u outside the real roots: from the root on
   u0's side out to ∞ in cn (:func:`complex_pair_quartic_outside`, B&F 260.00), escaping in finite time.
 * **a quartic with no real root** (two complex pairs, positive lead): u = α1 + b tan(φ0 + am(κt + v_s)) from
   u = α1 + b tan φ, which turns dt = du/√P into dψ/(κ√(1 − m sin²ψ)) (:func:`two_pair_quartic`); u passes every
   value between its escapes to −∞ and +∞.
 
+A cyclic coordinate's rate ċ = R(u) that is a polynomial in u integrates in closed form on the first two
+(:func:`elementary_rate_integral`): on u = u0 + s t + a t², R(u(t)) is a polynomial in t; on u = α + p₊E + p₋/E,
+E = e^{κt}, it is Σ_j C_j E^j (j = −deg R … deg R), and ∫₀^t = C_0 t + Σ_{j≠0} C_j (e^{jκt} − 1)/(jκ) — a
+projectile's horizontal coordinate, ẏ = p_y − w x with a magnetic-like coupling.
+
 Not covered here: a quadratic with a double real root (u − α ∝ e^{±κt}); rates with poles in u (a rational R,
-which the motion may pass) on these forms, and any rate on the cubic's cn form.
+which the motion may pass) on the elementary forms, and any rate on the cn and tan forms.
 """
 
 from __future__ import annotations
