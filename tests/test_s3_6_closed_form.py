@@ -447,6 +447,18 @@ def test_inverse_square_repulsion_under_u_equal_q_squared():
     assert abs(result.report["summary"]["x_min"] - np.sqrt(1.0 / E)) <= 4e-16
 
 
+def test_a_fast_polynomial_motion_passes_its_own_check():
+    """The polynomial form has no time scale of its own: the derivative check resolves the outputs' span (an
+    inverse-square repulsion with k = 1e6 turns within 1 ms; a step of 1e-4 s failed the check, measured)."""
+    result = run_scene(_scene(["x"], "x_dot**2/2 - k/x**2", dict(k=1e6), dict(x=1.0, x_dot=-1.0), t_end=1e-3,
+                              samples=101))
+    assert result.report["method"] == "exact", result.report.get("note")
+    t = np.linspace(0.0, 1e-3, 101)
+    E = 0.5 + 1e6
+    # x = √(x0² + 2x0ẋ0 t + 2E t²) by hand, its constants rounded once: a few ulp of x ≤ 1.1
+    assert np.max(np.abs(result.columns["x"] - np.sqrt(1.0 - 2.0 * t + 2 * E * t**2))) <= 4 * 2.0**-52 * 2
+
+
 def test_a_collapse_through_a_fold_is_refused_with_the_reason():
     """L = ẋ²/2 + k/x² falling inwards: x² = u reaches 0 with u̇ ≠ 0, where ẋ = u̇/2x is infinite (x(t) has no
     continuation); the closed form stops there with the reason (q = √u would stick at 0)."""

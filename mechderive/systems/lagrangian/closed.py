@@ -447,6 +447,10 @@ class ClosedMotion:
         t = np.asarray(t, dtype=float)
         picks = t[np.unique(np.linspace(0, len(t) - 1, min(len(t), 5)).astype(int))]
         h = 1e-4 * self.time_scale
+        if getattr(self.motion, "form", None) == "polynomial" and np.ptp(t) > 0:
+            # u = u0 + u̇0 t + (c1/4) t² has no time scale of its own (its κ = 1 is a unit): resolve the outputs' span
+            # (x = √u of an inverse-square repulsion over 1 ms has its curvature there, not over seconds)
+            h = min(h, 1e-4 * float(np.ptp(t)))
         escape = self.motion.escape_times
         if escape is not None:
             # near a blow-up u ~ (t₊ − t)⁻²: the truncation is ~ (h/(t₊ − t))² of the rate, kept at ~10⁻⁶ (the
