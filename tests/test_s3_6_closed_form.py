@@ -322,6 +322,18 @@ def test_u_of_t_for_degree_at_most_one(name, coeffs, u0, direction):
         assert float(motion.turning_point) == -coeffs[1] / c1
 
 
+def test_degree_one_keeps_its_digits_as_c1_goes_to_zero():
+    """u = u0 + u̇0 t + (c1/4) t² divides by nothing: as c1 → 0 the motion tends to the uniform one without losing
+    digits; only the turning point −c0/c1 recedes (here to −1e20, exact from the coefficients)."""
+    t = np.linspace(0.0, 1e3, 11)
+    for c1 in (1e-20, 1e-9, -1e-9):
+        motion = elliptic_motion([c1, 1.0], 0.0, 1)
+        speed = np.sqrt(1.0)  # P(0) = c0
+        # the hand formula in doubles: a few ulp of |u| ≤ 1e3
+        assert np.max(np.abs(motion.u(t) - (speed * t + c1 * t**2 / 4))) <= 4 * 2.0**-52 * 1e3
+        assert float(motion.turning_point) == -1.0 / c1
+
+
 def test_degree_at_most_one_refuses_what_is_no_motion():
     with pytest.raises(NotElliptic, match="P = -2.0 < 0"):
         elliptic_motion([-2.0], 0.0, 1)
