@@ -92,6 +92,153 @@ def test_cubic_unbounded_branch_reaches_infinity_in_finite_time():
     assert np.max(np.abs(motion.u(t) / ref - 1)) <= 1e-9
 
 
+@pytest.mark.parametrize("u0, direction", [(-2.5, -1), (-2.5, 1), (-2.0, 0)], ids=["outwards", "inwards first",
+                                                                               "from the root"])
+def test_cubic_unbounded_branch_with_negative_lead_is_the_mirror_image(u0, direction):
+    # u ≤ r1 for a cubic with negative lead: ũ = −u on the branch ũ ≥ r̃3 of P(−ũ); infinite at v = ±K
+    coeffs = -np.poly((-2.0, 0.5, 3.0))
+    motion = elliptic_motion(coeffs, u0, direction)
+    before, after = motion.escape_times
+    t = np.linspace(0.0, 0.98 * after, 200)
+    ref, _ = _ode_reference(coeffs, u0, direction, t)
+    # as the branch u ≥ r3 above: DOP853's error grows towards the escape (measured ≲ 1e-11 of |u|)
+    assert np.max(np.abs(motion.u(t) / ref - 1)) <= 1e-9
+    assert float(motion.interval[0]) == pytest.approx(-2.0, abs=1e-15) and motion.interval[1] < 0
+
+
+THROUGH_INFINITY = [
+    # P = x⁴/2 − x² + 0.2 (outside the humps of V = x²/2 − x⁴/4 at E = 0.1): roots ±0.476, ±1.332
+    ("u ≥ r4, outwards", 1.5, 1), ("u ≥ r4, inwards first", 1.5, -1), ("u ≤ r1, outwards", -1.5, -1),
+    ("u ≤ r1, inwards first", -1.5, 1), ("from r4", 1.3321398835112932, 0), ("far out", 3.0, 1),
+]
+
+
+@pytest.mark.parametrize("name, u0, direction", THROUGH_INFINITY, ids=[c[0] for c in THROUGH_INFINITY])
+def test_quartic_outside_its_roots_escapes_through_infinity(name, u0, direction):
+    """Four real roots, positive lead, u0 outside them: the Möbius form along the arc (r4, ∞, r1), its pole
+    w_p = −C/D inside (0, 1) reached at the escape times."""
+    coeffs = [0.5, 0.0, -1.0, 0.0, 0.2]
+    motion = elliptic_motion(coeffs, u0, direction)
+    before, after = motion.escape_times
+    t = np.linspace(0.0, 0.97 * after, 200)
+    ref, _ = _ode_reference(coeffs, u0, direction, t)
+    # DOP853's error grows towards the escape (measured ≲ 9e-13 of 1 + |u| at 0.97 t₊, u ~ 30)
+    assert np.max(np.abs(motion.u(t) - ref) / (1 + np.abs(ref))) <= 1e-10
+    # the escape time: ∫ du/√P from u0 out to ±∞ (and twice from the root to u0 when moving inwards first), 30 digits
+    from mpmath import inf, mp, mpf, quad, sqrt
+    with mp.workdps(30):
+        c = [mpf(x) for x in coeffs]
+        # the integrand's endpoint singularity at the root needs the root itself (the 40-digit one), not its double
+        root, out = motion.interval[0], np.sign(u0)
+        start = root if direction == 0 else mpf(u0)
+        f = lambda x: 1 / sqrt(abs(mp.polyval(c, x)))  # noqa: E731
+        back = 2 * abs(quad(f, [root, start])) if direction * out < 0 else 0
+        assert abs(after - float(abs(quad(f, [start, out * inf])) + back)) <= 1e-12 * after
+
+
+def test_escape_through_infinity_agrees_with_the_cubic_of_u_equal_x_squared():
+    """The symmetric hump two ways: ẋ² = x⁴/2 − x² + 0.2 (the quartic's arc through ∞) and, with w = x²,
+    ẇ² = 4w(w²/2 − w + 0.2) (the cubic's branch w ≥ r3, B&F 238.00): the same escape times and the same x(t)."""
+    for x0, direction in ((1.5, 1), (1.5, -1)):
+        quartic = elliptic_motion([0.5, 0.0, -1.0, 0.0, 0.2], x0, direction)
+        cubic = elliptic_motion([2.0, -4.0, 0.8, 0.0], x0**2, direction)
+        # two independent constants (Möbius with an interior pole; affine in sn²), each rounded once: ~1e-15
+        assert np.allclose(quartic.escape_times, cubic.escape_times, rtol=1e-14, atol=0)
+        t = np.linspace(0.0, 0.97 * quartic.escape_times[1], 101)
+        # near the escape both lose digits as the pole's conditioning, ~ulp(v)/(v_p − v): measured 1e-13 at 0.97 t₊
+        assert np.max(np.abs(quartic.u(t) - np.sqrt(cubic.u(t))) / quartic.u(t)) <= 1e-12
+
+
+PAIR_OUTSIDE = [
+    # (name, lead, the complex root, u0, direction): P = lead (u + 1)(u − 2)|u − z|², lead > 0, u outside [−1, 2]
+    ("u ≥ b, outwards", 1.0, complex(1, 2), 3.0, 1), ("u ≥ b, inwards first", 1.0, complex(1, 2), 3.0, -1),
+    ("u ≤ a, outwards", 1.0, complex(1, 2), -2.0, -1), ("u ≤ a, inwards first", 1.0, complex(1, 2), -2.0, 1),
+    ("from b", 1.0, complex(1, 2), 2.0, 0), ("from a", 1.0, complex(1, 2), -1.0, 0),
+    ("pair far left, m near 1", 0.5, complex(-3, 0.5), 3.0, -1),
+]
+
+
+@pytest.mark.parametrize("name, lead, z, u0, direction", PAIR_OUTSIDE, ids=[c[0] for c in PAIR_OUTSIDE])
+def test_quartic_with_a_complex_pair_escapes_outside_its_real_roots(name, lead, z, u0, direction):
+    """Two real roots, a complex pair, positive lead: u = (eF − fE + (eF + fE) cn)/(F − E + (F + E) cn) from the root
+    e on u0's side to ∞ at the pole (B&F 260.00; see quadrature_open.complex_pair_quartic_outside)."""
+    coeffs = lead * np.real(np.poly((-1.0, 2.0, z, z.conjugate())))
+    motion = elliptic_motion(coeffs, u0, direction)
+    before, after = motion.escape_times
+    t = np.linspace(0.0, 0.97 * after, 200)
+    ref, _ = _ode_reference(coeffs, u0, direction, t)
+    # DOP853's error near the escape (measured ≲ 1e-12 of 1 + |u| at 0.97 t₊, u ~ 30 to 90)
+    assert np.max(np.abs(motion.u(t) - ref) / (1 + np.abs(ref))) <= 1e-10
+    # the escape time against ∫ du/√P from the start out to ±∞ (twice to the root and back when moving inwards)
+    from mpmath import inf, mp, mpf, quad, sqrt
+    with mp.workdps(30):
+        c = [mpf(x) for x in coeffs]
+        root, out = motion.interval[0], np.sign(u0 - 0.5)
+        start = root if direction == 0 else mpf(u0)
+        f = lambda x: 1 / sqrt(abs(mp.polyval(c, x)))  # noqa: E731
+        back = 2 * abs(quad(f, [root, start])) if direction * out < 0 else 0
+        assert abs(after - float(abs(quad(f, [start, out * inf])) + back)) <= 1e-12 * after
+    # u̇² = P(u) along it, to rounding (u̇ from cn's derivative: an independent check of κ)
+    u, u_dot = motion.u(t), motion.u_dot(t)
+    assert np.max(np.abs(u_dot**2 - np.polyval(coeffs, u)) / (1 + np.abs(np.polyval(coeffs, u)))) <= 1e-13
+
+
+TWO_PAIRS = [
+    # (name, lead, z1, z2, u0, direction): P = lead |u − z1|² |u − z2|² > 0 everywhere
+    ("upwards", 1.0, complex(0.5, 1.0), complex(-1.0, 0.7), 0.3, 1),
+    ("downwards", 1.0, complex(0.5, 1.0), complex(-1.0, 0.7), 0.3, -1),
+    ("from far below", 1.0, complex(0.5, 1.0), complex(-1.0, 0.7), -3.0, 1),
+    ("one pair twice (m = 0)", 2.0, complex(0.0, 1.0), complex(0.0, 1.0), 0.3, 1),
+    ("a narrow pair passed, m near 1", 0.5, complex(1.0, 2.0), complex(-2.0, 0.3), 4.0, -1),
+]
+
+
+@pytest.mark.parametrize("name, lead, z1, z2, u0, direction", TWO_PAIRS, ids=[c[0] for c in TWO_PAIRS])
+def test_quartic_with_no_real_root_passes_every_value(name, lead, z1, z2, u0, direction):
+    """u = α1 + b tan(φ0 + am(κt + v_s)) (derived in quadrature_open.two_pair_quartic): from −∞ to ∞ in the finite
+    time between its escapes."""
+    coeffs = lead * np.real(np.poly([z1, z1.conjugate(), z2, z2.conjugate()]))
+    motion = elliptic_motion(coeffs, u0, direction)
+    before, after = motion.escape_times
+    t = np.linspace(0.0, 0.97 * after, 200)
+    ref, _ = _ode_reference(coeffs, u0, direction, t)
+    # DOP853's error grows over the long excursion through every value (measured ≲ 4e-11 of 1 + |u|)
+    assert np.max(np.abs(motion.u(t) - ref) / (1 + np.abs(ref))) <= 1e-9
+    # the escape times against ∫ du/√P from u0 to ±∞, split at the pairs' centres (a narrow pair is a near-singularity
+    # of the integrand mpmath's quadrature must be shown)
+    from mpmath import inf, mp, mpf, quad, sqrt
+    with mp.workdps(30):
+        c = [mpf(x) for x in coeffs]
+        f = lambda x: 1 / sqrt(mp.polyval(c, x))  # noqa: E731
+
+        def time_to(end):
+            inner = sorted({z1.real, z2.real, u0})
+            points = [mpf(x) for x in inner if min(u0, end) <= x <= max(u0, end)]
+            return abs(quad(f, sorted(points + [end])))
+
+        assert abs(after - float(time_to(direction * inf))) <= 1e-12 * after
+        assert abs(-before - float(time_to(-direction * inf))) <= 1e-12 * abs(before)
+    u, u_dot = motion.u(t), motion.u_dot(t)
+    assert np.max(np.abs(u_dot**2 - np.polyval(coeffs, u)) / (1 + np.polyval(coeffs, u))) <= 1e-13
+    assert motion.interval[0] == -np.inf  # no turning point
+
+
+def test_over_a_quartic_hill_as_a_scene():
+    """V = −x²/2 − x³/10 − x⁴/4 with E > 0: P has no real root; auto takes the tan form up to near the escape
+    (t₊ ≈ 1.888), against integration."""
+    lag, init = "x_dot**2/2 + x**4/4 + x**3/10 + x**2/2", dict(x=0.0, x_dot=1.0)
+    exact = run_scene(_scene(["x"], lag, {}, init, t_end=1.7, samples=171, summary=["x_min", "period"]))
+    integrated = run_scene(_scene(["x"], lag, {}, init, t_end=1.7, samples=171, method="integrate"))
+    details = exact.report["details"]["closed_form"]
+    assert exact.report["method"] == "exact", exact.report.get("note")
+    assert (details["degree"], details["motion"]) == (4, "unbounded: reaches infinity in finite time")
+    assert details["escape_times"][1] == pytest.approx(1.8878626694, rel=1e-10)
+    for q, column in exact.columns.items():
+        bound = 10 * (exact.report["error_estimate"] + integrated.report["error_estimate"]) + 1e-12
+        assert np.max(np.abs(column - integrated.columns[q])) <= bound * (1 + np.max(np.abs(column))), q
+    assert exact.report["summary"]["x_min"] is None and exact.report["summary"]["period"] is None
+
+
 def test_rate_integral_by_partial_fractions_and_pi():
     coeffs = -2.0 * np.poly((-2.0, 0.2, 0.9))   # a spherical pendulum's kind of cubic, u = cos θ in (0.2, 0.9)
     motion = elliptic_motion(coeffs, 0.5, 1)
@@ -124,24 +271,463 @@ def test_rate_with_a_polynomial_part_integrates_with_legendre_e():
 
 
 def test_configurations_not_covered_are_refused_with_the_reason():
-    with pytest.raises(NotElliptic, match="complex roots"):
+    with pytest.raises(NotElliptic, match="P < 0 everywhere"):
         elliptic_motion([-1.0, 0.0, -2.0, 0.0, -1.0], 0.0, 1)  # −(u² + 1)²: no real root
-    with pytest.raises(NotElliptic, match="through infinity"):
-        elliptic_motion(np.real(np.poly((-1.0, 2.0, complex(1, 2), complex(1, -2)))), 3.0, 1)
     with pytest.raises(NotElliptic, match="double root"):
         elliptic_motion(np.poly((0.0, 1.0, 1.0)), 1.0, 0)  # on the double root, P'' > 0: unstable equilibrium
     with pytest.raises(NotElliptic, match="P\\(u0\\) ≥ 0"):
         elliptic_motion(-np.poly((0.0, 1.0, 1.0)), 0.5, 1)  # P < 0 there
-    with pytest.raises(NotElliptic, match="degree 2, 3 or 4"):
-        elliptic_motion([1.0, 2.0], 0.0, 1)
-    with pytest.raises(NotElliptic, match="complex roots"):
-        elliptic_motion([1.0, 0.0, 1.0], 2.0, 1)  # u̇² = u² + 1: no real root, u passes through every value
+    with pytest.raises(NotElliptic, match="degree ≤ 4"):
+        elliptic_motion([1.0, 0.0, 0.0, 0.0, 0.0, 2.0], 0.0, 1)
     # roots 1e-25 apart, resolved by the 40-digit roots: a periodic motion of period ~ln(1e25)/κ, not a separatrix
     with pytest.raises(NotElliptic, match="1.0e-25 apart"):
         elliptic_motion(["-1", "-1.0000000000000000000000001", "1.0", "1.0000000000000000000000001"], 0.3, 1)
     motion = elliptic_motion(np.poly((0.0, 1.0, 1.0)), 0.0, 0)  # a separatrix: its rates are refused
     with pytest.raises(NotElliptic, match="m = 1"):
         rate_integral(motion, [1.0], [1.0, 2.0])
+
+
+# --- degree ≤ 1: uniform and uniformly accelerated motion -------------------------------------------------------
+
+LINEAR = [
+    # (name, P's coefficients, u0, direction): P = c1 u + c0, u = u0 + u̇0 t + (c1/4) t²
+    ("uniform, forwards", [2.0], 0.3, 1),
+    ("uniform, backwards", [2.0], 0.3, -1),
+    ("accelerated, c1 > 0, outwards", [1.5, -0.5], 1.0, 1),
+    ("accelerated, c1 > 0, towards the root first", [1.5, -0.5], 1.0, -1),
+    ("accelerated, c1 < 0, thrown up", [-2.0, 1.0], 0.0, 1),
+    ("accelerated, c1 < 0, from the root", [-2.0, 1.0], 0.5, 0),
+    ("accelerated, c1 > 0, from the root", [2.0, -1.0], 0.5, 0),
+]
+
+
+@pytest.mark.parametrize("name, coeffs, u0, direction", LINEAR, ids=[c[0] for c in LINEAR])
+def test_u_of_t_for_degree_at_most_one(name, coeffs, u0, direction):
+    motion = elliptic_motion(coeffs, u0, direction)
+    t = np.linspace(0.0, 3.0, 301)
+    ref, _ = _ode_reference(coeffs, u0, direction, t)
+    # DOP853 integrates ü = c1/2 exactly up to rounding (its error estimate is zero on a quadratic): ~10 ulp
+    assert np.max(np.abs(motion.u(t) - ref)) <= 1e-14 * (1 + np.max(np.abs(ref)))
+    # by hand: u0 + u̇0 t + c1 t²/4 with u̇0 = ±√P(u0), and from the root (u̇0 = 0) towards the side of c1's sign
+    c1 = coeffs[0] if len(coeffs) == 2 else 0.0
+    speed = direction * np.sqrt(np.polyval(coeffs, u0))
+    hand = u0 + speed * t + c1 * t**2 / 4
+    assert np.max(np.abs(motion.u(t) - hand)) <= 4e-16 * np.max(np.abs(hand))
+    assert np.max(np.abs(motion.u_dot(t) - (speed + c1 * t / 2))) <= 4e-16 * (1 + np.max(np.abs(speed + c1 * t)))
+    if direction == 0:
+        assert np.all(np.sign(motion.u(t[1:]) - u0) == np.sign(c1))
+    # no period; the root (if any) is the turning point
+    assert not np.isfinite(float(motion.u_period)) and motion.escape_times is None
+    if c1:
+        assert float(motion.turning_point) == -coeffs[1] / c1
+
+
+def test_degree_one_keeps_its_digits_as_c1_goes_to_zero():
+    """u = u0 + u̇0 t + (c1/4) t² divides by nothing: as c1 → 0 the motion tends to the uniform one without losing
+    digits; only the turning point −c0/c1 recedes (here to −1e20, exact from the coefficients)."""
+    t = np.linspace(0.0, 1e3, 11)
+    for c1 in (1e-20, 1e-9, -1e-9):
+        motion = elliptic_motion([c1, 1.0], 0.0, 1)
+        speed = np.sqrt(1.0)  # P(0) = c0
+        # the hand formula in doubles: a few ulp of |u| ≤ 1e3
+        assert np.max(np.abs(motion.u(t) - (speed * t + c1 * t**2 / 4))) <= 4 * 2.0**-52 * 1e3
+        assert float(motion.turning_point) == -1.0 / c1
+
+
+def test_degree_at_most_one_refuses_what_is_no_motion():
+    with pytest.raises(NotElliptic, match="P = -2.0 < 0"):
+        elliptic_motion([-2.0], 0.0, 1)
+    with pytest.raises(NotElliptic, match="P\\(u0\\) ≥ 0"):
+        elliptic_motion([1.0, -1.0], 0.5, 1)  # P(0.5) = −0.5
+    with pytest.raises(NotElliptic, match="direction"):
+        elliptic_motion([2.0], 0.0, 0)  # u̇² = 2 but no direction given: not a start at rest
+    at_rest = elliptic_motion([0.0], 0.7, 0)  # P ≡ 0: at rest
+    assert at_rest.steady and np.all(at_rest.u(np.linspace(0, 5, 6)) == 0.7)
+
+
+def _fall(initial, **scene):
+    return run_scene(_scene(["z"], "m*z_dot**2/2 - m*g*z", dict(m=2.0, g=9.81), initial, **scene))
+
+
+def test_body_falling_under_uniform_gravity_is_solved_exactly_by_auto():
+    """L = m ż²/2 − m g z: u = z, P = 2E/m − 2 g z (degree 1); z = z0 + ż0 t − g t²/2 by hand."""
+    result = _fall(dict(z=1.0, z_dot=3.0), t_end=4.0, samples=401, summary=["z_min", "z_max", "period"])
+    assert result.report["method"] == "exact", result.report.get("note")
+    assert result.report["details"]["closed_form"]["motion"] == "unbounded: uniformly accelerated"
+    t = np.linspace(0.0, 4.0, 401)
+    z, zd = 1.0 + 3.0 * t - 9.81 * t**2 / 2, 3.0 - 9.81 * t
+    # the closed form is the same polynomial with constants rounded once: a few ulp of the largest |z| (~67)
+    assert np.max(np.abs(result.columns["z"] - z)) <= 4 * 2.0**-52 * np.max(np.abs(z))
+    assert np.max(np.abs(result.columns["z_dot"] - zd)) <= 4 * 2.0**-52 * np.max(np.abs(zd))
+    assert result.report["error_estimate"] <= 1e-13
+    # the top of the throw z0 + ż0²/(2g) is the turning point; there is no lowest point and no period
+    s, e = result.report["summary"], result.report["summary_error"]
+    # its estimate: z_max moved by E's rounding (8 ulp of the run's energy scale ~1.3e3) over m g, ~1e-13
+    assert abs(s["z_max"] - (1.0 + 9.0 / (2 * 9.81))) <= 1e-15 * 2 and e["z_max"] <= 1e-12
+    assert s["z_min"] is None and "not bounded" in e["z_min"]
+    assert s["period"] is None and "uniformly accelerated" in e["period"]
+
+
+def test_body_dropped_from_rest_falls_from_its_turning_point():
+    result = _fall(dict(z=10.0, z_dot=0.0), t_end=1.0, samples=11, summary=["z_max"])
+    t = np.linspace(0.0, 1.0, 11)
+    assert result.report["method"] == "exact"
+    assert np.max(np.abs(result.columns["z"] - (10.0 - 9.81 * t**2 / 2))) <= 4e-15 * 10
+    assert result.report["summary"]["z_max"] == 10.0
+
+
+def test_free_rotor_turns_uniformly():
+    """L = J θ̇²/2: θ is the only coordinate and is cyclic; it is the coordinate solved (P = 2E/J constant):
+    θ = θ0 + θ̇0 t by hand."""
+    result = run_scene(_scene(["theta"], "J*theta_dot**2/2", dict(J=2.0), dict(theta=0.1, theta_dot=-0.7),
+                              t_end=100.0, samples=101, summary=["period"]))
+    assert result.report["method"] == "exact", result.report.get("note")
+    assert result.report["details"]["closed_form"]["motion"] == "unbounded: uniform motion"
+    t = np.linspace(0.0, 100.0, 101)
+    # θ0 + θ̇0 t with θ̇0 = −√(2E/J) (E from the doubles, one rounding): a few ulp of |θ| ≤ 70
+    assert np.max(np.abs(result.columns["theta"] - (0.1 - 0.7 * t))) <= 4 * 2.0**-52 * 70
+    assert np.all(result.columns["theta_dot"] == -0.7)
+    assert result.report["summary"]["period"] is None
+
+
+@pytest.mark.parametrize("lagrangian, parameters, initial, bounded, value", [
+    # the bead on a turning rod, r̈ = w² r (m = 1, hyperbolic): |r| ≥ √(−2E)/w = √1.75/2 on either side of 0
+    ("r_dot**2/2 + w**2*r**2/2", dict(w=2.0), dict(r=1.0, r_dot=-1.5), "r_min", np.sqrt(1.75) / 2),
+    ("r_dot**2/2 + w**2*r**2/2", dict(w=2.0), dict(r=-1.0, r_dot=1.5), "r_max", -np.sqrt(1.75) / 2),
+    ("r_dot**2/2 + w**2*r**2/2", dict(w=2.0), dict(r=-1.0, r_dot=-1.5), "r_max", -np.sqrt(1.75) / 2),
+    # a body under gravity pointing up (L = mż²/2 + mgz): its lowest point z0 − ż0²/2g, or its start at rest
+    ("m*r_dot**2/2 + m*g*r", dict(m=1.0, g=9.81), dict(r=1.0, r_dot=3.0), "r_min", 1.0 - 9.0 / (2 * 9.81)),
+    ("m*r_dot**2/2 + m*g*r", dict(m=1.0, g=9.81), dict(r=1.0, r_dot=0.0), "r_min", 1.0),
+], ids=["bead, r > 0", "bead, r < 0, inwards", "bead, r < 0, outwards", "gravity up, moving", "gravity up, at rest"])
+def test_unbounded_motions_report_their_turning_point_on_its_side(lagrangian, parameters, initial, bounded, value):
+    """The turning point bounds q on the motion's side only (that of u0, or of P > 0 from a start on the root) —
+    by hand; the other side has no bound and says so."""
+    result = run_scene(_scene(["r"], lagrangian, parameters, initial, t_end=1.0, samples=11,
+                              summary=["r_min", "r_max"]))
+    s, e = result.report["summary"], result.report["summary_error"]
+    other = "r_max" if bounded == "r_min" else "r_min"
+    # the root of P from E rounded once: a few ulp
+    assert abs(s[bounded] - value) <= 4e-16 * abs(value) and e[bounded] <= 1e-13
+    assert s[other] is None and "not bounded" in e[other]
+
+
+def test_printed_formulas_of_a_projectile():
+    """``derive … closed_form_u`` for deg P ≤ 1: z = z₀ + ż₀ (t − t₀) − g (t − t₀)²/2 (symbolically, by difference), and
+    x − x₀ = (p_x/m)(t − t₀); m and κ do not apply and say so."""
+    from mechderive.errors import DerivationError
+    from mechderive.systems.lagrangian import from_lagrangian
+    from mechderive.systems.lagrangian.closed import solution_formulas
+
+    system = from_lagrangian("m*(x_dot**2 + z_dot**2)/2 - m*g*z", ["x", "z"], ["m", "g"])
+    formulas = solution_formulas(system)
+    names = {s.name: s for s in system.definition.parameter_symbols}
+    tau = sp.Symbol("t") - sp.Symbol("t_0")
+    u0, v0 = sp.Symbol("u_0", real=True), sp.Symbol("udot_0", real=True)
+    assert sp.simplify(formulas["u"][1] - (u0 + v0 * tau - names["g"] * tau**2 / 2)) == 0
+    assert sp.simplify(formulas["x"][1] - sp.Symbol("p_x", real=True) / names["m"] * tau) == 0
+    assert "m" not in formulas and "kappa" not in formulas
+    derivation = {d.name: d for d in system.derivations()}["closed_form_m"]
+    with pytest.raises(DerivationError, match="do not apply"):
+        derivation.build(None)
+
+
+def test_free_particle_moves_uniformly_in_every_coordinate():
+    """L = m|ṙ|²/2: every coordinate cyclic; the first is the one solved (P = 2E/m constant: uniform, or at rest),
+    the others by their constant rates: r = r0 + ṙ0 t by hand."""
+    init = dict(x=0.0, y=1.0, z=3.0, x_dot=0.0, y_dot=-2.0, z_dot=0.5)
+    result = run_scene(_scene(["x", "y", "z"], "m*(x_dot**2 + y_dot**2 + z_dot**2)/2", dict(m=2.0), init, t_end=3.0,
+                              samples=31))
+    assert result.report["method"] == "exact", result.report.get("note")
+    assert result.report["details"]["closed_form"]["motion"] == "steady"  # x at rest; y and z move
+    t = np.linspace(0.0, 3.0, 31)
+    for q in "xyz":
+        # constants rounded once (√(2E/m), p/m): a few ulp of |q| ≤ 5
+        assert np.max(np.abs(result.columns[q] - (init[q] + init[q + "_dot"] * t))) <= 4 * 2.0**-52 * 5, q
+
+
+def test_inverse_square_repulsion_under_u_equal_q_squared():
+    """L = ẋ²/2 − k/x²: u = x² gives u̇² = 8E u − 8k (degree 1), so x² = x0² + 2x0ẋ0 t + 2E t² by hand — the
+    turning point x² = k/E is the closest approach, x_min."""
+    result = run_scene(_scene(["x"], "x_dot**2/2 - k/x**2", dict(k=1.0), dict(x=1.0, x_dot=-1.0), t_end=3.0,
+                              samples=301, summary=["x_min"]))
+    assert result.report["method"] == "exact", result.report.get("note")
+    assert result.report["details"]["closed_form"]["substitution"] == "u = q²"
+    t = np.linspace(0.0, 3.0, 301)
+    E = 0.5 + 1.0
+    # √ of the same polynomial, its constants rounded once: a few ulp of x ≤ 4.7
+    assert np.max(np.abs(result.columns["x"] - np.sqrt(1.0 - 2.0 * t + 2 * E * t**2))) <= 4 * 2.0**-52 * 5
+    assert abs(result.report["summary"]["x_min"] - np.sqrt(1.0 / E)) <= 4e-16
+
+
+def test_a_fast_polynomial_motion_passes_its_own_check():
+    """The polynomial form has no time scale of its own: the derivative check resolves the outputs' span (an
+    inverse-square repulsion with k = 1e6 turns within 1 ms; a step of 1e-4 s failed the check, measured)."""
+    result = run_scene(_scene(["x"], "x_dot**2/2 - k/x**2", dict(k=1e6), dict(x=1.0, x_dot=-1.0), t_end=1e-3,
+                              samples=101))
+    assert result.report["method"] == "exact", result.report.get("note")
+    t = np.linspace(0.0, 1e-3, 101)
+    E = 0.5 + 1e6
+    # x = √(x0² + 2x0ẋ0 t + 2E t²) by hand, its constants rounded once: a few ulp of x ≤ 1.1
+    assert np.max(np.abs(result.columns["x"] - np.sqrt(1.0 - 2.0 * t + 2 * E * t**2))) <= 4 * 2.0**-52 * 2
+
+
+def test_a_collapse_through_a_fold_is_refused_with_the_reason():
+    """L = ẋ²/2 + k/x² falling inwards: x² = u reaches 0 with u̇ ≠ 0, where ẋ = u̇/2x is infinite (x(t) has no
+    continuation); the closed form stops there with the reason (q = √u would stick at 0)."""
+    scene = dict(t_end=3.0, samples=31, method="exact")
+    with pytest.raises(InvalidInputError, match="reaches the fold of u = q² at u = 0 .* a collapse"):
+        run_scene(_scene(["x"], "x_dot**2/2 + k/x**2", dict(k=1.0), dict(x=1.0, x_dot=-0.5), **scene))
+    before = run_scene(_scene(["x"], "x_dot**2/2 + k/x**2", dict(k=1.0), dict(x=1.0, x_dot=-0.5), t_end=0.5))
+    assert before.report["method"] == "exact"
+
+
+# --- a quadratic with no real root: u = α + β sinh(κt + v_s) ---------------------------------------------------
+
+NO_TURNING_POINT = [
+    # (name, c2, α, β, u0, direction): P = c2((u − α)² + β²)
+    ("upwards from below α", 1.0, 0.5, 1.5, -0.3, 1),
+    ("downwards from below α", 1.0, 0.5, 1.5, -0.3, -1),
+    ("downwards from above α", 4.0, -1.0, 0.7, 2.0, -1),
+    ("a narrow pair, β ≪ |u0 − α|", 2.0, 1.0, 1e-6, 3.0, -1),
+]
+
+
+@pytest.mark.parametrize("name, c2, alpha, beta, u0, direction", NO_TURNING_POINT, ids=[c[0] for c in NO_TURNING_POINT])
+def test_u_of_t_for_a_quadratic_with_no_real_root(name, c2, alpha, beta, u0, direction):
+    coeffs = [c2, -2 * c2 * alpha, c2 * (alpha**2 + beta**2)]
+    motion = elliptic_motion(coeffs, u0, direction)
+    t = np.linspace(0.0, 2.5 / np.sqrt(c2), 251)  # to e^{2.5} ≈ 12 times the start's distance from α
+    ref, _ = _ode_reference(coeffs, u0, direction, t)
+    # DOP853 at rtol 1e-13 on the linear ü = c2(u − α): its global error, measured ≲ 3e-13 relative here
+    assert np.max(np.abs(motion.u(t) - ref) / (1 + np.abs(ref))) <= 1e-11
+    # by hand: u = α + dβ sinh(κt + asinh(d(u0 − α)/β)), κ = √c2, d the direction (u̇ = dκβ cosh(…) has its sign);
+    # the constants are rounded once from c2, α, β given as doubles, and the hand formula at 30 digits
+    from mpmath import asinh, mp, mpf, sinh, sqrt
+    with mp.workdps(30):
+        a, b, k = mpf(alpha), mpf(beta), sqrt(mpf(c2))
+        hand = np.array([float(a + direction * b * sinh(k * mpf(x) + asinh(direction * (mpf(u0) - a) / b)))
+                         for x in t])
+    # coefficients passed as doubles move α, β by ~1e-16 relative: a few ulp of the largest |u|
+    assert np.max(np.abs(motion.u(t) - hand)) <= 1e-14 * (1 + np.max(np.abs(hand)))
+    assert motion.turning_point is None and not np.isfinite(float(motion.u_period)) and motion.escape_times is None
+
+
+def test_a_complex_pair_too_near_the_real_axis_is_refused():
+    # β² = 1e-36 beside α = 1: the 40-digit constants cannot tell it from a double root (another motion)
+    with pytest.raises(NotElliptic, match="nearly double root"):
+        elliptic_motion(["1", "-2", "1.000000000000000000000000000000000001"], 3.0, 1)
+    with pytest.raises(NotElliptic, match="P < 0 everywhere"):
+        elliptic_motion([-1.0, 0.0, -1.0], 0.0, 1)
+
+
+def test_over_the_top_of_an_inverted_parabola():
+    """L = ẋ²/2 + k x²/2 with E > 0 and x0 < 0 < ẋ0: x passes the top x = 0 and runs off; by hand
+    x = x0 cosh ωt + (ẋ0/ω) sinh ωt, ω = √k."""
+    result = run_scene(_scene(["x"], "x_dot**2/2 + k*x**2/2", dict(k=4.0), dict(x=-0.5, x_dot=1.5), t_end=3.0,
+                              samples=301, summary=["x_min", "period"]))
+    assert result.report["method"] == "exact", result.report.get("note")
+    assert result.report["details"]["closed_form"]["motion"] == "unbounded: no turning point"
+    t = np.linspace(0.0, 3.0, 301)
+    hand = -0.5 * np.cosh(2 * t) + 0.75 * np.sinh(2 * t)
+    # x grows to ~100: cosh and sinh each round to an ulp of ~100, the closed form's e^{±κt} likewise
+    assert np.max(np.abs(result.columns["x"] - hand)) <= 1e-14 * np.max(np.abs(hand))
+    assert result.report["error_estimate"] <= 1e-13
+    assert result.report["summary"]["x_min"] is None and "no turning point" in result.report["summary_error"]["x_min"]
+
+
+# --- a cubic with one real root: u = r + σA(1 − cn)/(1 + cn), out to ∞ in finite time -----------------------------
+
+ONE_REAL_ROOT = [
+    # (name, lead, r, α ± iβ, u0, direction): P = lead (u − r)((u − α)² + β²), the motion on the side of sign(lead)
+    ("right of r, outwards", 1.0, 0.5, complex(-1, 1.5), 1.0, 1),
+    ("right of r, inwards first", 1.0, 0.5, complex(-1, 1.5), 1.0, -1),
+    ("right of r, the pair on the motion's side", 2.0, 0.5, complex(2, 1.0), 1.0, 1),
+    ("left of r (lead < 0)", -1.0, 0.5, complex(-1, 1.5), 0.0, 1),
+    ("left of r, from the root", -1.0, 0.5, complex(-1, 1.5), 0.5, 0),
+    ("left of r, the pair on the motion's side", -1.0, 0.5, complex(1, 0.5), -0.5, 1),
+]
+
+
+def _cubic(lead, r, pair):
+    return list(lead * np.real(np.poly([r, pair, pair.conjugate()])))
+
+
+@pytest.mark.parametrize("name, lead, r, pair, u0, direction", ONE_REAL_ROOT, ids=[c[0] for c in ONE_REAL_ROOT])
+def test_u_of_t_for_a_cubic_with_one_real_root(name, lead, r, pair, u0, direction):
+    coeffs = _cubic(lead, r, pair)
+    motion = elliptic_motion(coeffs, u0, direction)
+    before, after = motion.escape_times
+    assert before < 0 < after
+    t = np.linspace(0.0, 0.95 * after, 201)  # u grows as 1/(t₊ − t)²: to ~400 |u0| here
+    ref, _ = _ode_reference(coeffs, u0, direction, t)
+    # DOP853's relative error grows towards the blow-up (measured ≲ 6e-12 of 1 + |u| at 0.95 t₊): 1e-10 is safe
+    assert np.max(np.abs(motion.u(t) - ref) / (1 + np.abs(ref))) <= 1e-10
+    # the escape time is the time to ∞: ∫ du/√P from u0 outwards (plus twice the way to r and back if moving
+    # inwards first), by mpmath's quadrature at 30 digits
+    from mpmath import inf, mp, mpf, quad, sqrt
+    with mp.workdps(30):
+        c = [mpf(x) for x in coeffs]
+        root, out = mpf(float(motion.interval[0])), np.sign(lead)
+        f = lambda x: 1 / sqrt(abs(mp.polyval(c, x)))  # noqa: E731
+        to_inf = quad(f, [mpf(u0), out * inf])
+        back = 2 * abs(quad(f, [root, mpf(u0)])) if direction * out < 0 else 0
+        assert abs(after - float(abs(to_inf) + back)) <= 1e-12 * after
+    # no period; the root is the turning point
+    assert not np.isfinite(float(motion.u_period))
+
+
+def test_cubic_with_one_real_root_satisfies_the_quadrature_symbolically():
+    """u = r + A(1 − cn)/(1 + cn), m = 1/2 − (r − α)/(2A), κ² = c3 A (the side u ≥ r; u → −u gives the other):
+    κ²(du/dv)² − P(u) ≡ 0 with du/dv = 2A sn dn/(1 + cn)², sn² = 1 − cn², dn² = 1 − m sn² (Byrd & Friedman
+    239.00, derived in quadrature_open._cubic_complex_pair and checked here by difference)."""
+    r, alpha, cn = sp.symbols("r alpha cn", real=True)
+    beta, c3 = sp.symbols("beta c3", positive=True)
+    A = sp.sqrt((r - alpha) ** 2 + beta**2)
+    m = sp.Rational(1, 2) - (r - alpha) / (2 * A)
+    u = r + A * (1 - cn) / (1 + cn)
+    du_dv_sq = 4 * A**2 * (1 - cn**2) * (1 - m * (1 - cn**2)) / (1 + cn) ** 4
+    P = c3 * (u - r) * ((u - alpha) ** 2 + beta**2)
+    assert sp.simplify(sp.expand(c3 * A * du_dv_sq - P)) == 0
+
+
+def test_quartics_with_a_pair_near_the_motion_are_refused():
+    # P = (u² + 1)((u − 2)² + 1e-20): u passes the nearly double root 2 ± 1e-10 i (1 − m ~ 1e-20)
+    with pytest.raises(NotElliptic, match="nearly double root"):
+        elliptic_motion(["1", "-4", "5.00000000000000000001", "-4", "4.00000000000000000001"], 0.0, 1)
+    # P = (u + 1)(u − 3)((u − 5)² + 1e-20), u ≥ 3 passing 5 ± 1e-10 i
+    coeffs = np.poly([-1.0, 3.0]).tolist()
+    import mpmath
+    with mpmath.workdps(40):
+        quad_pair = [mpmath.mpf(1), mpmath.mpf(-10), mpmath.mpf(25) + mpmath.mpf("1e-20")]
+        p = [sum(coeffs[i] * quad_pair[j - i] for i in range(3) if 0 <= j - i < 3) for j in range(5)]
+        with pytest.raises(NotElliptic, match="nearly double root"):
+            elliptic_motion([mpmath.nstr(x, 40) for x in p], 3.5, 1)
+
+
+def test_cubic_with_a_pair_near_the_motion_is_refused():
+    # P = u((u − 1)² + 1e-18): the motion u ≥ 0 passes the nearly double root at u = 1, 1 − m ≈ 2.5e-19
+    with pytest.raises(NotElliptic, match="nearly double root the motion passes"):
+        elliptic_motion(["1", "-2", "1.000000000000000001", "0"], 0.5, 1)
+
+
+_ESCAPING = "x_dot**2/2 + x**3/3 + x"  # V = −x³/3 − x: F = 2E + 2x³/3 + 2x, one real root (F' > 0)
+
+
+def test_cubic_with_one_real_root_as_a_scene_until_its_escape():
+    init = dict(x=0.5, x_dot=1.0)
+    motion = elliptic_motion([2.0 / 3.0, 0.0, 2.0, 2 * (0.5 - 0.5**3 / 3 - 0.5)], 0.5, 1)
+    t_escape = motion.escape_times[1]  # ≈ 2.474
+    exact = run_scene(_scene(["x"], _ESCAPING, {}, init, t_end=0.9 * t_escape, samples=201,
+                             summary=["x_min", "x_max", "period"]))
+    assert exact.report["method"] == "exact", exact.report.get("note")
+    assert exact.report["details"]["closed_form"]["motion"] == "unbounded: reaches infinity in finite time"
+    assert exact.report["details"]["closed_form"]["escape_times"][1] == pytest.approx(t_escape, rel=1e-14)
+    integrated = run_scene(_scene(["x"], _ESCAPING, {}, init, t_end=0.9 * t_escape, samples=201, method="integrate"))
+    for q, column in exact.columns.items():
+        # both within their estimates of the truth: the integration's (rtol 1e-12 met) dominates
+        bound = 10 * (exact.report["error_estimate"] + integrated.report["error_estimate"]) + 1e-12
+        assert np.max(np.abs(column - integrated.columns[q])) <= bound * (1 + np.max(np.abs(column))), q
+    # the root of P is the turning point (x_min, in the past here), there is no x_max and no period
+    s, e = exact.report["summary"], exact.report["summary_error"]
+    assert abs(s["x_min"] - float(motion.interval[0])) <= 1e-15 and s["x_max"] is None and s["period"] is None
+    # x_min's estimate moves E by 8 ulp of the run's energy scale, which grows to ~4e5 towards the escape (ẋ ~ 900):
+    # ~1e-9, pessimistic (the value is the root to 1e-15) but an upper bound
+    assert e["x_min"] <= 1e-8 and "reaches infinity" in e["period"]
+    # past the escape the closed form is refused with the time (auto then integrates, which stops there too)
+    with pytest.raises(InvalidInputError, match="reaches infinity at t = 2.474"):
+        run_scene(_scene(["x"], _ESCAPING, {}, init, t_end=3.0, samples=31, method="exact"))
+
+
+@pytest.mark.parametrize("x_dot", [-1.3, -0.5], ids=["E = 0.077: four real roots", "E = −0.64: a complex pair"])
+def test_escape_over_an_asymmetric_quartic_hump_as_a_scene(x_dot):
+    """V = x²/2 − x³/10 − x⁴/4 (no u = q² reduction: a quartic in u = x) from outside its humps: auto takes the
+    closed form through ∞ (the Möbius arc in sn², or the cn form below the well's bottom, where the inner roots are
+    a complex pair) up to near the escape, against integration; the outer root is x_min."""
+    lag, init = "x_dot**2/2 - x**2/2 + x**3/10 + x**4/4", dict(x=1.6, x_dot=x_dot)
+    exact = run_scene(_scene(["x"], lag, {}, init, t_end=1.0, samples=101, summary=["x_min", "x_max"]))
+    integrated = run_scene(_scene(["x"], lag, {}, init, t_end=1.0, samples=101, method="integrate"))
+    details = exact.report["details"]["closed_form"]
+    assert exact.report["method"] == "exact", exact.report.get("note")
+    assert (details["degree"], details["motion"]) == (4, "unbounded: reaches infinity in finite time")
+    for q, column in exact.columns.items():
+        bound = 10 * (exact.report["error_estimate"] + integrated.report["error_estimate"]) + 1e-12
+        assert np.max(np.abs(column - integrated.columns[q])) <= bound * (1 + np.max(np.abs(column))), q
+    assert exact.report["summary"]["x_max"] is None
+    # at the turning point V(x_min) = E = ẋ0²/2 + V(x0), to the rounding of V's terms (~1)
+    x_min = exact.report["summary"]["x_min"]
+    assert 1.0 < x_min < 1.6 and abs(_V(x_min) - (x_dot**2 / 2 + _V(1.6))) <= 1e-15
+
+
+def _V(x):
+    return x**2 / 2 - x**3 / 10 - x**4 / 4
+
+
+def test_the_unbounded_branch_of_a_real_cubic_is_refused_past_its_escape():
+    """u ≥ r3 of a cubic with three real roots reaches ∞ at v = K: past it the Möbius form comes back from −∞ ... ∞
+    (u̇² = P(u) still holds, so the conserved energy cannot tell), which is no motion: refused with the time."""
+    lag, init = "x_dot**2/2 + x**3/3 - x", dict(x=2.0, x_dot=float(np.sqrt(4 / 3)))  # P = 2x³/3 − 2x, x ≥ √3
+    before = run_scene(_scene(["x"], lag, {}, init, t_end=1.5, samples=151))
+    assert before.report["method"] == "exact"
+    assert before.report["details"]["closed_form"]["motion"] == "unbounded: reaches infinity in finite time"
+    assert before.report["details"]["closed_form"]["period"] is None  # 2K/κ is the formula's, through ∞
+    # its mirror image: V = x³/3 − x, x ≤ −√3 falling to −∞ (P with negative lead, the branch u ≤ r1), against
+    # integration (rtol 1e-12 met by both; x reaches ~ −31)
+    mirror = dict(x=-2.0, x_dot=-float(np.sqrt(4 / 3)))
+    exact = run_scene(_scene(["x"], "x_dot**2/2 - x**3/3 + x", {}, mirror, t_end=1.5, samples=151, summary=["x_max"]))
+    integrated = run_scene(_scene(["x"], "x_dot**2/2 - x**3/3 + x", {}, mirror, t_end=1.5, samples=151,
+                                  method="integrate"))
+    assert exact.report["method"] == "exact" and exact.report["summary"]["x_max"] == pytest.approx(-np.sqrt(3), 1e-15)
+    bound = 10 * (exact.report["error_estimate"] + integrated.report["error_estimate"]) + 1e-12
+    assert np.max(np.abs(exact.columns["x"] - integrated.columns["x"])) <= bound * 31
+    with pytest.raises(InvalidInputError, match="reaches infinity at t = 1.9411"):
+        run_scene(_scene(["x"], lag, {}, init, t_end=3.0, samples=31, method="exact"))
+
+
+# --- cyclic rates polynomial in u on the elementary forms ----------------------------------------------------
+
+ELEMENTARY_RATES = [
+    # (name, P's coefficients, u0, direction, R's coefficients in u)
+    ("uniformly accelerated, R quadratic", [-2.0, 1.0], 0.0, 1, [0.3, -1.0, 2.0]),
+    ("uniform, R linear", [2.0], 0.3, -1, [1.0, 0.5]),
+    ("exponential, R quadratic", [1.0, -1.0, 2.5], 0.3, 1, [0.5, -1.0, 2.0]),
+    ("exponential, R linear", [4.0, 8.0, 4.5], -0.3, -1, [-1.0, 0.7]),
+]
+
+
+@pytest.mark.parametrize("name, coeffs, u0, direction, numerator", ELEMENTARY_RATES,
+                         ids=[c[0] for c in ELEMENTARY_RATES])
+def test_polynomial_rates_integrate_on_the_elementary_forms(name, coeffs, u0, direction, numerator):
+    """ċ = R(u) polynomial: a polynomial in t on u = u0 + s t + a t², Σ C_j e^{jκt} on the exponential form."""
+    motion = elliptic_motion(coeffs, u0, direction)
+    integral = rate_integral(motion, numerator, [1.0])
+    t = np.linspace(0.0, 2.5, 251)
+    _, ref = _ode_reference(coeffs, u0, direction, t, lambda u: np.polyval(numerator, u))
+    # DOP853 at rtol 1e-13 (measured ≲ 5e-14 of the largest value here): 1e-12 is safe
+    assert np.max(np.abs(integral(t) - ref)) <= 1e-12 * (1 + np.max(np.abs(ref)))
+    # the doubles against the same sums at 30 digits (what the estimate measures): rounding, a few ulp
+    from mpmath import mp
+    with mp.workdps(30):
+        assert max(abs(float(integral.value_mp(float(x))) - y) for x, y in zip(t[::25], integral(t[::25]))) <= \
+            1e-15 * (1 + np.max(np.abs(ref)))
+    with pytest.raises(NotElliptic, match="poles in u"):
+        rate_integral(motion, [1.0], [1.0, 0.0])  # R = 1/u: the motion may pass its pole
+
+
+def test_projectile_is_a_parabola_in_closed_form():
+    """L = m(ẋ² + ż²)/2 − m g z: x cyclic (ẋ = p_x/m), z uniformly accelerated; by hand x = x0 + ẋ0 t,
+    z = z0 + ż0 t − g t²/2."""
+    init = dict(x=0.5, z=1.0, x_dot=2.0, z_dot=3.0)
+    result = run_scene(_scene(["x", "z"], "m*(x_dot**2 + z_dot**2)/2 - m*g*z", dict(m=1.5, g=9.81), init, t_end=2.0,
+                              samples=201, summary=["z_max", "x_per_period"]))
+    assert result.report["method"] == "exact", result.report.get("note")
+    t = np.linspace(0.0, 2.0, 201)
+    # the same polynomials with constants rounded once (p_x/m, E): a few ulp of the largest |x|, |z| (~14)
+    assert np.max(np.abs(result.columns["x"] - (0.5 + 2.0 * t))) <= 4 * 2.0**-52 * 5
+    assert np.max(np.abs(result.columns["z"] - (1.0 + 3.0 * t - 9.81 * t**2 / 2))) <= 4 * 2.0**-52 * 14
+    assert np.max(np.abs(result.columns["x_dot"] - 2.0)) <= 4 * 2.0**-52 * 2
+    s, e = result.report["summary"], result.report["summary_error"]
+    assert abs(s["z_max"] - (1.0 + 9.0 / (2 * 9.81))) <= 4e-16 * 2
+    assert s["x_per_period"] is None and "no period" in e["x_per_period"]
 
 
 # m = 1: from a turning point towards a double root of P (a separatrix), or to ∞ where the quadratic's P has its
@@ -213,6 +799,18 @@ SYSTEMS = [
     ("double well, homoclinic", ["x"], "x_dot**2/2 + x**2/2 - x**4/2", {}, dict(x=1.0, x_dot=0.0),
      "separatrix: towards an unstable equilibrium"),
     ("bead on a rotating rod", ["r"], "r_dot**2/2 + w**2*r**2/2", dict(w=2.0), dict(r=1.0, r_dot=-1.5), "unbounded"),
+    # degree ≤ 1: a projectile's height (uniform gravity) and a free rotor (its only coordinate cyclic)
+    ("body thrown up under uniform gravity", ["z"], "m*z_dot**2/2 - m*g*z", dict(m=1.0, g=9.81), dict(z=1.0, z_dot=20.0),
+     "unbounded: uniformly accelerated"),
+    # no turning point: over the top of an inverted parabola
+    ("over an inverted parabola", ["x"], "x_dot**2/2 + k*x**2/2", dict(k=1.0), dict(x=-0.5, x_dot=1.0),
+     "unbounded: no turning point"),
+    # a cyclic rate polynomial in u on them: a projectile (ẋ constant) and ẏ = p_y − w x with an inverted k x²/2
+    ("projectile", ["x", "z"], "m*(x_dot**2 + z_dot**2)/2 - m*g*z", dict(m=1.0, g=9.81),
+     dict(x=0.0, z=0.0, x_dot=3.0, z_dot=4.0), "unbounded: uniformly accelerated"),
+    ("gyroscopic coupling over an inverted parabola", ["x", "y"], "(x_dot**2 + y_dot**2)/2 + w*x*y_dot + k*x**2/2",
+     dict(w=1.0, k=2.0), dict(x=0.2, y=0.0, x_dot=1.0, y_dot=0.5), "unbounded: no turning point"),
+    ("free rotor", ["theta"], "J*theta_dot**2/2", dict(J=0.3), dict(theta=0.5, theta_dot=2.5), "unbounded: uniform motion"),
 ]
 
 
@@ -651,3 +1249,32 @@ def test_separatrix_keeps_its_digits_where_integration_falls_off():
     assert run.report["method"] == "exact" and run.report["error_estimate"] <= 1e-14
     assert np.max(np.abs(run.columns["theta"] - (np.pi - 4 * np.arctan(np.exp(-2 * t))))) <= 1e-15
     assert np.max(np.abs(run.columns["theta_dot"] / (4 / np.cosh(2 * t)) - 1)) <= 1e-13
+
+
+@settings(max_examples=40, deadline=None, derandomize=True)
+@given(degree=st.integers(0, 4), lead=st.sampled_from([-1.5, -0.5, 0.5, 2.0]),
+       coefficients=st.lists(st.floats(-2.0, 2.0), min_size=4, max_size=4), u0=st.floats(-3.0, 3.0),
+       direction=st.sampled_from([-1, 1]))
+def test_u_of_t_for_random_polynomials_of_any_configuration(degree, lead, coefficients, u0, direction):
+    """Any P of degree ≤ 4 (bounded, separatrix-free, unbounded, escaping): from a start where P(u0) > 0, u(t) agrees
+    with DOP853 on ü = P'(u)/2 up to 3 time units or 0.9 of the way to an escape — or the configuration is refused
+    with the reason (NotElliptic), never answered wrongly."""
+    coeffs = [lead, *coefficients[:degree]]
+    if np.polyval(coeffs, u0) <= 1e-3:
+        return  # no motion here, or a start too near a root for the reference's √P(u0)
+    try:
+        motion = elliptic_motion(coeffs, u0, direction)
+    except NotElliptic as exc:
+        assert "expected" in str(exc), exc
+        return
+    end = 3.0
+    if motion.escape_times is not None:
+        end = min(end, 0.9 * motion.escape_times[1])
+    period = float(motion.u_period)
+    if np.isfinite(period):
+        end = min(end, 3 * period)
+    t = np.linspace(0.0, end, 101)
+    ref, _ = _ode_reference(coeffs, u0, direction, t)
+    # DOP853 at rtol 1e-13: its error, grown near an escape or a slow passage, measured ≤ 1.5e-11 of 1 + |u| over 200
+    # seeded draws that hit every configuration (polynomial, exponential, sn², m = 1, cn, cn and sn² escaping, tan)
+    assert np.max(np.abs(motion.u(t) - ref) / (1 + np.abs(ref))) <= 1e-8, (coeffs, u0, direction)

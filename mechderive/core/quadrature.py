@@ -37,11 +37,12 @@ import sympy as sp
 
 from ..errors import DerivationError
 from .lagrangian import LagrangianModel
+from .model import derived
 from .simplify import trig_normal
 
 __all__ = ["Quadrature", "Substitution", "Oscillation", "NoQuadrature", "NoSubstitution", "SUBSTITUTIONS",
            "reduce_to_quadrature", "find_substitution", "oscillation", "MAX_DEGREE", "Shape", "SHAPES",
-           "cyclic_rates", "without_time_gauge"]
+           "cyclic_rates", "without_time_gauge", "one_free_coordinate"]
 
 #: the largest degree of u̇² = P(u) solved by elliptic functions
 MAX_DEGREE = 4
@@ -418,6 +419,23 @@ def cyclic_rates(model: LagrangianModel, substitution: Substitution) -> dict:
             continue
         out[name] = (N, D)
     return out
+
+
+class _FirstNotCyclic(LagrangianModel):
+    """A model whose first coordinate is not counted as cyclic (see :func:`one_free_coordinate`)."""
+
+    @derived
+    def cyclic_coordinates(self) -> tuple:
+        return tuple(self.coordinates[1:])
+
+
+def one_free_coordinate(model: LagrangianModel) -> LagrangianModel:
+    """``model`` itself, or, where every coordinate is cyclic (L = I θ̇²/2: a free rotor; m|ṙ|²/2: a free particle),
+    the same L with its first coordinate counted as the one left (the reduction by all would leave none): q̇² = F
+    constant, P of degree 0 under u = q — uniform motion — and the others' rates constant."""
+    if not model.coordinates or model.remaining_coordinates:
+        return model
+    return _FirstNotCyclic(model.lagrangian, list(model.coordinates))
 
 
 # --- explicit time that is only a gauge ----------------------------------------------------------------

@@ -12,7 +12,8 @@ other roots, and ∞ when the degree is odd (for a quadratic c = d = ∞ and m =
 branch points of ẇ² = 4κ² w(1 − w)(1 − m w) onto those of u̇² = P(u), so m is their cross-ratio and κ
 the constant ratio of the two sides; the chapter's u = u1 + (u2 − u1) sn²(…) for the heavy top (3.76) is
 the cubic case (d = ∞, B/C = u2 − u1), and Byrd & Friedman's 236.00, 254.00-257.00 and 238.00 are the
-others (oscillation between adjacent roots, and the cubic's unbounded branch u ≥ r3 through d = ∞).
+others (oscillation between adjacent roots, and the cubic's unbounded branch u ≥ r3 through d = ∞; with a
+negative lead, u ≤ r1 is its mirror image under u → −u).
 
 A rational function R(u) of the motion (a cyclic coordinate's rate ċ = R(u)) integrates in closed
 form the same way: R(M(w)) = Q0 + Q1 w + Σ_j c_j / (1 − n_j w) by partial fractions in w, and
@@ -37,14 +38,33 @@ x = sech t), or the unbounded quadratic P = c0 (u − r1)(u − r2), c0 > 0, who
 (u = r + (r − r') sinh²(κt + v_s), κ² = c0/4: the bead on a turning rod, r̈ = ω² r).  No period; the phase
 is not reduced (K = ∞).
 
-Not covered (the caller integrates instead; :class:`NotElliptic` says why): a quartic with only complex
-roots or escaping through infinity, a cubic with one real root, a quadratic with no real root (no turning
-point), degree ≤ 1, an unstable equilibrium (a start on a double root with P'' > 0), the cyclic rates at
-m = 1, and rates with complex poles, poles on the motion, or a polynomial part of degree > 1 in w.
+Degree ≤ 1 — uniform motion (a free particle, a free rotor) and uniformly accelerated motion (a body under
+uniform gravity), u = u0 + u̇0 t + (c1/4) t² —, the quadratic with no real root, u = α + β sinh(κt + v_s)
+(no turning point: over the top of an inverted parabola), the cubic with one real root r, u = r +
+σA(1 − cn)/(1 + cn) (from r out to ∞, reached in finite time), the quartic with two real roots, a complex pair
+and a positive lead outside its real roots (in cn, B&F 260.00) and the quartic with no real root, u = α1 +
+b tan(φ0 + am v), are solved in :mod:`mechderive.solvers.quadrature_open`, to which :func:`elliptic_motion` hands
+them.  A cyclic rate ċ = R(u) polynomial in u integrates on the degree ≤ 1 and exponential forms to a polynomial
+in t or a sum of e^{jκt} (:func:`rate_integral` hands them to :func:`~.quadrature_open.elementary_rate_integral`).
+
+A quartic with four real roots and a positive lead, started outside them (u ≥ r4 or u ≤ r1), runs through ∞
+along the arc (r4, ∞, r1): the Möbius form above with its pole inside (0, 1), a the root on u0's side.
+
+Where u reaches ∞ in finite time — the cubic's unbounded branch u ≥ r3 at v = ±K (w = 1), the quartic's arc
+through ∞ at its pole, the cn and tan forms at theirs — ``escape_times`` gives the two times around t = 0;
+beyond them the formulas continue through ∞ (u̇² = P(u) still holds) but describe no motion, and the caller
+refuses them.
+
+Not covered (the caller integrates instead; :class:`NotElliptic` says why): a complex pair so near the real
+axis on the motion that 1 − m < 1e-15 (a nearly double root the motion passes slowly), a quadratic with a
+double root or a complex pair too near the real axis to resolve at 40 digits, an unstable equilibrium (a start
+on a double root with P'' > 0), the cyclic rates at m = 1, on the cn and tan forms and with poles on the
+elementary forms, and rates with complex poles, poles on the motion, or a polynomial part of degree > 1 in w.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from typing import Any, Sequence
 
@@ -248,6 +268,28 @@ class EllipticMotion:
         A, B, C, D = self.mobius
         return (B * C - A * D) / self.mp_den(sn, cn) ** 2 * 2 * self.kappa * sn * cn * dn
 
+    @property
+    def escape_times(self) -> tuple[float, float] | None:
+        """(t₋, t₊): where M has its pole on the motion u reaches ∞ in finite time, before and after t = 0 — at w = 1
+        (v = ±K) for the cubic's unbounded branch u ≥ r3 (B&F 238.00, M(1) = ∞), at w_p = −C/D inside (0, 1) for a
+        quartic with positive lead outside its roots.  None where u stays finite (a bounded motion, or m = 1 where
+        ∞ is approached in infinite time)."""
+        mp = _mp()
+        if self.steady or self.asymptotic:
+            return None
+        A, B, C, D = self.mobius
+        with mp.workdps(DPS):
+            # the pole of M, C + D w_p = 0: in (0, 1] the motion reaches it (w_p = 1: the cubic's d = ∞ listing; inside:
+            # a quartic whose arc of motion runs through ∞, r4 → ∞ or r1 → −∞), at sn²(v) = w_p, v = ±v_p + 2Kn
+            if D == 0 or not 0 < -C / D <= 1:
+                return None
+            w_p = -C / D
+            v_p = self.K if w_p == 1 else mp.ellipf(mp.asin(mp.sqrt(w_p)), self.m)
+            v_s = self.v_start
+            ahead = v_p if v_p > v_s else 2 * self.K - v_p
+            behind = -v_p if -v_p < v_s else -2 * self.K + v_p
+            return float((behind - v_s) / self.kappa), float((ahead - v_s) / self.kappa)
+
     def u_mp(self, t) -> Any:
         """u(t) at the working precision (mpmath), as a reference for the doubles."""
         mp = _mp()
@@ -276,6 +318,11 @@ class EllipticMotionCn(EllipticMotion):
     def minus(self, point: Any, t: Any, jac: tuple | None = None) -> np.ndarray:
         return self.u(t, jac) - float(point)
 
+    @property
+    def escape_times(self) -> None:
+        """None: u stays between its two real roots (the Möbius form here is in cn, not sn²)."""
+        return None
+
     def signed_root(self, end: str, t: Any, jac: tuple | None = None) -> tuple[np.ndarray, np.ndarray]:
         raise NotElliptic("expected no fold of the substitution on a quartic with complex roots (not covered)")
 
@@ -297,9 +344,10 @@ class EllipticMotionCn(EllipticMotion):
 def _complex_pair_quartic(c: list, roots: list, u0: Any, direction: int) -> EllipticMotion:
     """The :class:`EllipticMotionCn` of a quartic with two real roots and a complex pair (see there)."""
     mp = _mp()
-    if c[0] > 0:
-        raise NotElliptic("expected a bounded motion, got a quartic with two real roots and positive leading "
-                          "coefficient: u escapes through infinity (not covered)")
+    if c[0] > 0:  # outside the real roots, escaping through ∞ (quadrature_open)
+        from .quadrature_open import complex_pair_quartic_outside
+
+        return complex_pair_quartic_outside(c, roots, u0, direction)
     a, b = roots
     if not a - mp.mpf(2) ** -40 * (1 + abs(u0)) <= u0 <= b + mp.mpf(2) ** -40 * (1 + abs(u0)):
         raise NotElliptic(f"expected the start between the real roots {mp.nstr(a, 10)} and {mp.nstr(b, 10)}, "
@@ -389,15 +437,31 @@ def _elliptic_motion(coefficients: Sequence, u0: Any, direction: int, dps: int) 
     mp = _mp()
     with mp.workdps(dps):
         c = [mp.mpf(x) for x in coefficients]
-        while c and c[0] == 0:
+        while len(c) > 1 and c[0] == 0:
             c = c[1:]
         degree = len(c) - 1
-        if degree < 2:
-            raise NotElliptic(f"expected u̇² = P(u) of degree 2, 3 or 4, got degree {degree}: uniform or "
-                              "uniformly accelerated motion, not periodic")
+        if degree > 4:
+            raise NotElliptic(f"expected u̇² = P(u) of degree ≤ 4, got degree {degree}")
         u0 = mp.mpf(u0)
+        if degree < 2:  # uniform or uniformly accelerated: polynomial in t (quadrature_open)
+            from .quadrature_open import open_motion
+
+            return open_motion(c, [], u0, direction)
         P = lambda x: mp.polyval(c, x)  # noqa: E731
         roots = _real_roots(c)
+        if degree == 2 and not roots or degree == 3 and len(roots) == 1 or degree == 4 and not roots:
+            # no turning point: u = α + β sinh(κt + v_s); or one, and an escape to ∞ in cn (quadrature_open)
+            from .quadrature_open import open_motion
+
+            return open_motion(c, roots, u0, direction)
+        if degree == 3 and c[0] < 0 and len(roots) == 3 and u0 <= roots[0] + mp.mpf(2) ** -40 * (1 + abs(u0)):
+            # u ≤ r1 of a cubic with negative lead: the mirror image ũ = −u of the branch ũ ≥ r̃3 of P̃(ũ) = P(−ũ),
+            # whose lead −c3 is positive (B&F 238.00 reflected); M's numerator and the branch points change sign
+            mirrored = _elliptic_motion([x * (-1) ** (degree - i) for i, x in enumerate(c)], -u0, -direction, dps)
+            A, B, C, D = mirrored.mobius
+            return dataclasses.replace(mirrored, coefficients=tuple(c), interval=tuple(-x for x in mirrored.interval),
+                                       branch_points=tuple(-x for x in mirrored.branch_points), mobius=(-A, -B, C, D),
+                                       _f={})
         if degree == 4 and len(roots) == 2:
             return _complex_pair_quartic(c, roots, u0, direction)
         if degree == 4 and len(roots) < 4 or degree == 3 and len(roots) < 3 or degree == 2 and len(roots) < 2:
@@ -471,9 +535,11 @@ def _elliptic_motion(coefficients: Sequence, u0: Any, direction: int, dps: int) 
         if degree == 4 and (mp.isinf(a) or mp.isinf(b)):
             raise NotElliptic("expected a finite interval of motion")
         lo, hi = points[found], points[(found + 1) % count]
-        if degree == 4 and not mp.isinf(hi) and hi < lo:
-            raise NotElliptic("expected motion between two finite roots, got u passing through ∞ (a quartic whose "
-                              "motion goes through the point at infinity of u): not covered")
+        if degree == 4 and not mp.isinf(hi) and hi < lo and u0 <= hi + slack:
+            # the arc from r4 through ∞ to r1 (positive lead): the motion leaves from the root on u0's side and escapes
+            # to ∞ in finite time (a pole of M inside (0, 1): escape_times); a = that root, the listing reversed if
+            # u0 ≤ r1 (the same m)
+            a, b, cc, d = b, a, d, cc
         mob = _mobius(a, b, d)
         winv = _inverse(mob, cc)
         m = mp.mpf(0) if mp.isinf(winv) else 1 / winv
@@ -686,9 +752,13 @@ def rate_integral(motion: EllipticMotion, numerator: Sequence, denominator: Sequ
     mpmath reads); raises :class:`NotElliptic` where the partial fractions in w are not the simple kind the
     module docstring lists."""
     mp = _mp()
+    if getattr(motion, "elementary", False):  # polynomial or exponential in t: a polynomial rate in closed form
+        from .quadrature_open import elementary_rate_integral
+
+        return elementary_rate_integral(motion, numerator, denominator)
     if isinstance(motion, EllipticMotionCn):
-        raise NotElliptic("expected a motion in sn² for a cyclic coordinate's Π, got a quartic with complex roots "
-                          "(its rates are not covered)")
+        raise NotElliptic("expected a motion in sn² for a cyclic coordinate's Π, got a cn form (a quartic with "
+                          "complex roots, or a cubic with one real root): its rates are not covered")
     if motion.asymptotic:
         raise NotElliptic("expected a periodic motion for a cyclic coordinate's Π, got m = 1 (a separatrix or a "
                           "hyperbolic escape): its rates are not covered")

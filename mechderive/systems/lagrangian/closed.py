@@ -15,7 +15,14 @@ The recipe, each step derived:
    (1 − cos q = 2 sin²(q/2)).  Through both folds (a rotation) q = q_a + s·am(v), exact for the sine-type
    substitutions (−1 + 2 sn² = cos(π + 2 am)).
 4. c(t) = c0 + ∫ R_c(u) dt by partial fractions in w = sn² and Π
-   (:func:`~mechderive.solvers.quadrature_motion.rate_integral`).
+   (:func:`~mechderive.solvers.quadrature_motion.rate_integral`); on the motions in elementary functions of t
+   (deg P ≤ 1, the quadratic with no real root: :mod:`mechderive.solvers.quadrature_open`) for R_c polynomial in
+   u, as a polynomial in t or a sum of exponentials.
+
+The unbounded motions (:mod:`~mechderive.solvers.quadrature_open`, and the cubic's branch u ≥ r3) have no period;
+their root of P, where there is one, is the turning point q passes (``<q>_min`` or ``<q>_max``, the other side
+unbounded).  Where u reaches ∞ in finite time (``escape_times``) times beyond are refused: the formulas continue
+through ∞ there, and u̇² = P(u) — hence the energy check — would not notice.
 
 The error estimate is measured on the run: at the last output time and five more (picked by the golden
 ratio, never all on whole periods) every output is evaluated again from the Jacobi functions and Π at 30
@@ -132,7 +139,8 @@ class ClosedMotion:
         a, b = motion.interval
         ends = []
         for end, value in (("a", a), ("b", b)):
-            if end == "b" and motion.asymptotic:  # approached, never reached: not a fold q passes through
+            if end == "b" and (motion.asymptotic or motion.escape_times is not None):
+                # approached, never reached (or beyond ∞, past the escape): not a fold q passes through
                 ends.append(None)
                 continue
             fold = None if mp.isinf(value) else self.shape.fold_point(float(value), q0)
@@ -143,9 +151,10 @@ class ClosedMotion:
         folds = [e for e in ends if e]
         if motion.steady:
             folds = []
-        if folds and isinstance(motion, EllipticMotionCn):
-            raise OutOfReach(f"the reduction {found.name} reaches a fold of the substitution on a quartic with "
-                             "complex roots: not covered")
+        elementary = getattr(motion, "elementary", False)
+        if folds and (isinstance(motion, EllipticMotionCn) or elementary):
+            raise OutOfReach(f"the reduction {found.name} reaches a fold of the substitution on a motion in cn or in "
+                             "elementary functions (complex roots of P, or degree ≤ 2 unbounded): not covered")
         if len(folds) == 2:
             if motion.mobius[3] != 0:
                 raise OutOfReach(f"a rotation through both folds of {found.name} with a quartic P: not covered")
@@ -165,8 +174,15 @@ class ClosedMotion:
             self.kind = "steady"
         elif motion.asymptotic and np.isfinite(float(b)):
             self.kind = "separatrix: towards an unstable equilibrium"
+        elif motion.escape_times is not None:
+            self.kind = "unbounded: reaches infinity in finite time"
+        elif np.isfinite(float(b)):
+            self.kind = "oscillation between turning points"
+        elif elementary:
+            self.kind = {"polynomial": "unbounded: uniformly accelerated" if motion.degree == 1 else
+                         "unbounded: uniform motion", "exponential": "unbounded: no turning point"}[motion.form]
         else:
-            self.kind = "oscillation between turning points" if np.isfinite(float(b)) else "unbounded"
+            self.kind = "unbounded"
         if found.name == "u = 1/q" and float(min(a, b)) <= 0 <= float(max(a, b)):
             # u = 1/q passes 0: q escapes to ±∞ there (Kepler's hyperbola along φ); past it u has no meaning
             self.kind = "unbounded: q → ∞ where u = 1/q reaches 0"
@@ -186,8 +202,11 @@ class ClosedMotion:
         # the period of q: twice u's through one fold (q returns after u's second turn), u's otherwise;
         # infinite at m = 1 (a separatrix, a hyperbolic escape)
         self.period = motion.u_period * (2 if self.kind == "libration through a fold" else 1)
+        if motion.escape_times is not None:
+            # the cubic's branch u ≥ r3 has 2K/κ as the period of its formula, which passes through ∞: no motion repeats
+            self.period = _mp().inf
         #: the motion's time scale: its period, or 1/κ where there is none
-        self.time_scale = float(self.period) if not motion.asymptotic else 1.0 / float(motion.kappa)
+        self.time_scale = float(self.period) if np.isfinite(float(self.period)) else 1.0 / float(motion.kappa)
 
     # --- constants --------------------------------------------------------------------------------
 
@@ -288,19 +307,28 @@ class ClosedMotion:
         mo = self.motion
         kind = self.kind if not mo.asymptotic or self.kind.startswith(("separatrix", "unbounded")) else \
             f"{self.kind}, on the separatrix (m = 1)"
-        return {"substitution": self.found.name, "degree": self.found.degree, "motion": kind,
-                "interval": [float(x) for x in mo.interval], "m": float(mo.m), "kappa": float(mo.kappa),
-                "period": float(self.period) if np.isfinite(float(self.period)) else None}
+        elementary = getattr(mo, "elementary", False)
+        out = {"substitution": self.found.name, "degree": self.found.degree, "motion": kind,
+               "interval": [float(x) for x in mo.interval], "m": None if elementary else float(mo.m),
+               "kappa": None if elementary and mo.form == "polynomial" else float(mo.kappa),
+               "period": float(self.period) if np.isfinite(float(self.period)) else None}
+        if mo.escape_times is not None:
+            out["escape_times"] = list(mo.escape_times)
+        return out
 
     def summary(self, name: str) -> float:
         """``<q>_min``, ``<q>_max`` (the turning points of q; the fold's mirror image for a libration through a
         fold) or ``<c>_per_period`` (c's advance over one period of q)."""
         if name.endswith("_per_period"):
+            if getattr(self.motion, "elementary", False) or self.motion.escape_times is not None:
+                raise OutOfReach(f"{name}: no period ({self.kind})")
             integral, _, _ = self.rate(name[: -len("_per_period")])
             return float(integral.advance * (2 if self.kind == "libration through a fold" else 1))
-        if self.kind in ("rotation", "unbounded"):
+        if self.kind == "rotation" or self.kind.startswith("unbounded: q"):
             raise OutOfReach(f"{name}: q is not bounded on this motion ({self.kind})")
         a, b = (float(x) for x in self.motion.interval)
+        if self.kind.startswith("unbounded"):
+            return self._unbounded_summary(name, a, b)
         if self.kind == "libration through a fold":
             other = a if self.end == "b" else b
             reach = abs(float(self.shape.inverse(np.array(other), self.q0)) - self.q_fold)
@@ -310,6 +338,30 @@ class ClosedMotion:
         else:
             ends = tuple(sorted(float(self.shape.inverse(np.array(x), self.q0)) for x in (a, b)))
         return ends[0] if name.endswith("_min") else ends[1]
+
+    def _unbounded_summary(self, name: str, a: float, b: float) -> float:
+        """``<q>_min`` / ``<q>_max`` of a motion from the turning point a (a root of P; none where a = −∞) out to
+        u = ±∞: the turning point's q is the bound on its side (reached in the motion's past or future, at
+        u̇ = 0), and the other side has none."""
+        if not np.isfinite(a) or a == b:
+            raise OutOfReach(f"{name}: q is not bounded on this motion ({self.kind}; u has no turning point)")
+        q_turn = float(self.shape.inverse(np.array(a), self.q0))
+        # the side of a the motion lies on: u0's, or from a start on a itself where P > 0, the sign of P'(a) (a simple
+        # root) — not (b − a)'s: the hyperbolic quadratic's u ≤ r1 branch is listed (r1, ∞), ∞ being reached via −∞
+        u0 = float(self.motion.u(np.zeros(1))[0])
+        if u0 != a:
+            u_side = np.sign(u0 - a)
+        else:
+            c = [float(x) for x in self.motion.coefficients]
+            u_side = np.sign(np.polyval(np.polyder(c), a))
+        # q moves away from q_turn on the side where u does, through g'(q)
+        with np.errstate(all="ignore"):
+            side = u_side * np.sign(float(self.shape.dg(np.array(q_turn))))
+        bounded = "_min" if side > 0 else "_max"
+        if not name.endswith(bounded):
+            raise OutOfReach(f"{name}: q is not bounded on this side ({self.kind}, from its turning point "
+                             f"{self.remaining} = {q_turn:.12g})")
+        return q_turn
 
     # --- evaluation ---------------------------------------------------------------------------------
 
@@ -344,6 +396,17 @@ class ClosedMotion:
             return (self.q_fold + self.eps * shape.scale * f,
                     self.eps * shape.scale * df * sigma_dot / np.sqrt(2.0))
         u = mo.u(t, jac)
+        if self.kind.startswith("unbounded") and not self.kind.startswith("unbounded: q"):
+            # an unbounded motion crossing a fold value of g that is not its turning point: there g'(q) = 0 while
+            # u̇ ≠ 0, so q̇ = u̇/g'(q) is infinite — a collapse (u = x² reaching 0 under V = −k/x²); past it g⁻¹
+            # has no branch to follow (q = √u would stick at 0)
+            u_start = float(mo.u(np.zeros(1))[0])
+            for u_e, _, _ in shape.folds:
+                past = np.sign(u - u_e) == -np.sign(u_start - u_e)
+                if u_start != u_e and np.any(past):
+                    raise OutOfReach(f"{self.remaining} reaches the fold of {self.found.name} at u = {u_e:g} with u̇ ≠ 0 "
+                                     f"(d{self.remaining}/dt infinite: a collapse) before "
+                                     f"{'t' if self.along is None else self.along} = {float(np.asarray(t)[past][0]):.6g}")
         if self.kind.startswith("unbounded: q"):
             past = np.sign(u) != np.sign(float(self.motion.u_mp(0.0)))
             if np.any(past):
@@ -357,6 +420,12 @@ class ClosedMotion:
     def columns(self, t: np.ndarray, wanted: Sequence[str]) -> dict:
         """The requested state columns (q, q_dot of every coordinate) at the times ``t``."""
         t = np.asarray(t, dtype=float)
+        escape = self.motion.escape_times
+        if escape is not None and t.size and not (escape[0] < np.min(t) and np.max(t) < escape[1]):
+            # u = ±∞ at the escape: past it the formula continues through ∞ (u̇² = P(u) still holds, the sign of u̇
+            # turned), which is no motion — refused, as a blow-up is for integration
+            raise OutOfReach(f"{self.remaining} reaches infinity at t = {escape[1]:.12g} (and, backwards, at "
+                             f"{escape[0]:.12g}): u̇² = P(u) blows up in finite time, the closed form stops there")
         jac = self.motion.jacobi(t)
         out: dict = {}
         r = self.remaining
@@ -378,6 +447,15 @@ class ClosedMotion:
         t = np.asarray(t, dtype=float)
         picks = t[np.unique(np.linspace(0, len(t) - 1, min(len(t), 5)).astype(int))]
         h = 1e-4 * self.time_scale
+        if getattr(self.motion, "form", None) == "polynomial" and np.ptp(t) > 0:
+            # u = u0 + u̇0 t + (c1/4) t² has no time scale of its own (its κ = 1 is a unit): resolve the outputs' span
+            # (x = √u of an inverse-square repulsion over 1 ms has its curvature there, not over seconds)
+            h = min(h, 1e-4 * float(np.ptp(t)))
+        escape = self.motion.escape_times
+        if escape is not None:
+            # near a blow-up u ~ (t₊ − t)⁻²: the truncation is ~ (h/(t₊ − t))² of the rate, kept at ~10⁻⁶ (the
+            # rounding, ulp(u)/h, stays ~10⁻¹³ of it)
+            h = min(h, 1e-3 * min(escape[1] - float(np.max(picks)), float(np.min(picks)) - escape[0]))
         angles = [n for n in names if n in (self.remaining, *self.cyclic)]
         if not angles:
             return None
@@ -413,13 +491,17 @@ class ClosedMotion:
         worst: dict = {}
         with mp.workdps(DPS):
             for i, ti in enumerate(ts):
-                v = mo.kappa * mp.mpf(float(ti)) + mo.v_start
-                sn, cn, dn = (mp.ellipfun(f, v, m=mo.m) for f in ("sn", "cn", "dn"))
-                u = mo.mp_u(sn, cn, dn)
+                if getattr(mo, "elementary", False):  # polynomial or exponential in t: no Jacobi functions
+                    v = sn = cn = dn = None
+                    u, u_dot = mo.mp_state(float(ti))
+                else:
+                    v = mo.kappa * mp.mpf(float(ti)) + mo.v_start
+                    sn, cn, dn = (mp.ellipfun(f, v, m=mo.m) for f in ("sn", "cn", "dn"))
+                    u, u_dot = mo.mp_u(sn, cn, dn), None
                 ref: dict = {}
                 r = self.remaining
                 if r in got:
-                    ref[r], ref[r + "_dot"] = self._q_mp(v, sn, cn, dn, u, float(got[r][i]))
+                    ref[r], ref[r + "_dot"] = self._q_mp(v, sn, cn, dn, u, float(got[r][i]), u_dot)
                 for c in self.cyclic:
                     if c in got:
                         integral, _, _ = self.rate(c)
@@ -443,20 +525,20 @@ class ClosedMotion:
         qs = next(iter(g.free_symbols))
         return sp.lambdify(qs, g, "mpmath"), sp.lambdify(qs, sp.diff(g, qs), "mpmath")
 
-    def _q_mp(self, v, sn, cn, dn, u, q_double: float) -> tuple:
+    def _q_mp(self, v, sn, cn, dn, u, q_double: float, u_dot: Any = None) -> tuple:
         mp = _mp()
         from ...solvers.quadrature_motion import _am_mp
 
         mo, shape = self.motion, self.shape
         kap = mo.kappa
-        A, B, C, D = mo.mobius
-        det = B * C - A * D
         if self.kind == "steady":
             return mp.mpf(self.q0), mp.mpf(0)
         if self.kind == "rotation":
             return (mp.mpf(self.q_fold) + self.S * shape.scale * _am_mp(v, mo.m),
                     self.S * shape.scale * kap * dn)
         if self.kind == "libration through a fold":
+            A, B, C, D = mo.mobius
+            det = B * C - A * D
             den = mo.mp_den(sn, cn)
             if self.end == "a":
                 rho = mp.sqrt(abs(det / C) / abs(den))
@@ -488,7 +570,7 @@ class ClosedMotion:
         q = mp.mpf(q_double)
         for _ in range(2):
             q = q - (gl(q) - u) / dgl(q)
-        return q, mo.mp_u_dot(sn, cn, dn) / dgl(q)
+        return q, (mo.mp_u_dot(sn, cn, dn) if u_dot is None else u_dot) / dgl(q)
 
 
 def closed_orbit(system: Any, along: str, parameters: dict, initial: dict) -> ClosedMotion:
@@ -523,6 +605,8 @@ def solution_formulas(system: Any) -> dict:
     u = found.variable
     P = found.polynomial
     deg = found.degree
+    if deg <= 1:
+        return _polynomial_formulas(system, found)
     chi, chi0 = sp.Symbol("chi", real=True), sp.Symbol("chi_0", real=True)
     ua, ub, uc, ud = sp.symbols("u_a u_b u_c u_d", real=True)
     lead = P.LC()
@@ -569,3 +653,30 @@ def solution_formulas(system: Any) -> dict:
                      f"d{name}/dt = {sp.sstr(sp.factor(N.as_expr() / D.as_expr()))} in partial fractions over its "
                      f"poles in u, integrated with Π(n; χ|m), n = (u_b − u_a)/(u_pole − u_a)")
     return out
+
+
+def _polynomial_formulas(system: Any, found: Any) -> dict:
+    """{name: (lhs, value, meaning)} for deg P ≤ 1: u = u₀ + u̇₀ (t − t₀) + (c₁/4)(t − t₀)² (ü = P'(u)/2 = c₁/2), and
+    each cyclic coordinate whose rate is a polynomial in u, c − c₀ = ∫ R(u) dt in t; no Jacobi functions (``m``,
+    ``kappa`` and ``t`` do not apply)."""
+    import sympy as sp
+
+    u, P = found.variable, found.polynomial
+    tau = sp.Symbol("t") - sp.Symbol("t_0")
+    s = sp.Symbol("s", real=True)
+    u0, v0 = sp.Symbol("u_0", real=True), sp.Symbol("udot_0", real=True)
+    c1 = P.as_expr().diff(u)  # a constant: P is linear
+    u_of_t = u0 + v0 * tau + c1 / 4 * tau**2
+    out = {"u": (sp.Symbol(str(u)), u_of_t,
+                 f"u = {found.name[4:]} in uniform (deg P = 0) or uniformly accelerated (deg P = 1) motion: ü = P'(u)/2; "
+                 "u_0 and udot_0 = ±√P(u_0) at t_0 (no Jacobi functions: m, κ do not apply)")}
+    for name, entry in system.cyclic_rates().items():
+        if isinstance(entry, str) or entry[1].degree() > 0:
+            continue
+        N, D = entry
+        rate = (N.as_expr() / D.as_expr()).subs(u, u_of_t.subs(tau, s))
+        c = sp.Symbol(name)
+        out[name] = (c - sp.Symbol(f"{name}_0"), sp.expand(sp.integrate(rate, (s, 0, tau))),
+                     f"d{name}/dt = {sp.sstr(N.as_expr() / D.as_expr())}, a polynomial in u, integrated in t")
+    return out
+

@@ -468,8 +468,13 @@ class LagrangianSystem(System):
         if "_reduced_model" not in self.__dict__:
             from ...core.quadrature import without_time_gauge
 
+            from ...core.quadrature import one_free_coordinate
+
             model = self.equations.lagrangian_model
-            self.__dict__["_reduced_model"] = without_time_gauge(model)[0] if self.definition.uses_time else model
+            model = without_time_gauge(model)[0] if self.definition.uses_time else model
+            # every coordinate cyclic (a free rotor, a free particle): nothing would be left to Routh-reduce to, so the
+            # first is the coordinate the quadrature solves (u̇² = P constant)
+            self.__dict__["_reduced_model"] = one_free_coordinate(model)
         return self.__dict__["_reduced_model"]
 
     def cyclic_rates(self) -> dict:
@@ -498,7 +503,7 @@ class LagrangianSystem(System):
         out = {}
         for n in names:
             if n == "period" and (base.kind == "steady" or base.kind.startswith("unbounded")):
-                out[n] = (None, f"a {base.kind} motion: no period")
+                out[n] = (None, f"no period: the motion is {base.kind}")
                 continue
             if n == "period" and base.motion.asymptotic:
                 out[n] = (None, f"m = 1 ({base.kind}): the motion takes infinitely long and does not return")
@@ -591,7 +596,8 @@ class LagrangianSystem(System):
                 from ...errors import DerivationError
 
                 raise DerivationError(f"closed_form_{name}: no printable formula (a quartic's rates, a rate that is "
-                                      "not simple partial fractions over its poles, or not a rational function of u)")
+                                      "not simple partial fractions over its poles, or not a rational function of u; "
+                                      "for deg P ≤ 1, m, κ and t(χ) do not apply)")
             return found[name][part]
 
         return tuple(Derivation(f"closed_form_{n}", meanings.get(n, f"{n} − {n}₀ by partial fractions in u and "
