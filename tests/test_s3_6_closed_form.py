@@ -1251,6 +1251,18 @@ def test_separatrix_keeps_its_digits_where_integration_falls_off():
     assert np.max(np.abs(run.columns["theta_dot"] / (4 / np.cosh(2 * t)) - 1)) <= 1e-13
 
 
+def test_separatrix_far_along_where_its_distances_underflow():
+    """At t = 500, π − θ ~ 4e^{−1000} and θ̇ ~ 8e^{−1000} underflow the doubles: θ rounds to π and θ̇ to 0 (or a
+    subnormal), within the estimate; the energy check must not see ∞ · 0 (it fell back to DOP853, off by 2π)."""
+    run = run_scene(_scene(["theta"], PENDULUM, dict(m=1.0, l=1.0, g=4.0), dict(theta=0.0, theta_dot=4.0),
+                           t_end=500.0, samples=11))
+    t = np.linspace(0.0, 500.0, 11)
+    assert run.report["method"] == "exact" and run.report["error_estimate"] <= 1e-14
+    assert np.max(np.abs(run.columns["theta"] - (np.pi - 4 * np.arctan(np.exp(-2 * t))))) <= 1e-15
+    assert np.all(np.isfinite(run.columns["theta_dot"]))
+    assert np.max(np.abs(run.columns["theta_dot"] - 4 / np.cosh(2 * t))) <= 1e-15
+
+
 @settings(max_examples=40, deadline=None, derandomize=True)
 @given(degree=st.integers(0, 4), lead=st.sampled_from([-1.5, -0.5, 0.5, 2.0]),
        coefficients=st.lists(st.floats(-2.0, 2.0), min_size=4, max_size=4), u0=st.floats(-3.0, 3.0),

@@ -393,8 +393,11 @@ class ClosedMotion:
                 f, df = np.arcsinh(x), 1.0 / np.sqrt(1.0 + x * x)
             else:
                 f, df = x, np.ones_like(x)
-            return (self.q_fold + self.eps * shape.scale * f,
-                    self.eps * shape.scale * df * sigma_dot / np.sqrt(2.0))
+            # on a separatrix, far along, u − u_o and σ̇ both underflow (e^{-2κt}, κt ≳ 350): q̇ is below the
+            # smallest double there, not ∞ · 0
+            with np.errstate(invalid="ignore"):
+                rate = np.where(sigma_dot == 0.0, 0.0, df * sigma_dot)
+            return (self.q_fold + self.eps * shape.scale * f, self.eps * shape.scale * rate / np.sqrt(2.0))
         u = mo.u(t, jac)
         if self.kind.startswith("unbounded") and not self.kind.startswith("unbounded: q"):
             # an unbounded motion crossing a fold value of g that is not its turning point: there g'(q) = 0 while
