@@ -256,7 +256,8 @@ _PREFETCH: dict[str, int] = {}
 PREFETCH_WAIT = 120.0
 
 
-def prefetch(jobs: Sequence[tuple[str, Callable[[], tuple[Sequence[Any], Any]], str]]) -> bool:
+def prefetch(jobs: Sequence[tuple[str, Callable[[], tuple[Sequence[Any], Any]], str]],
+             prepare: Callable[[], Any] | None = None) -> bool:
     """Start building ``jobs`` ((name, build, module), as :func:`cached_lambdify` takes them) in a forked
     child process that writes them to the disk cache, while this process goes on with other derivations:
     a cold start uses a second core.  True if a child was started.
@@ -267,6 +268,11 @@ def prefetch(jobs: Sequence[tuple[str, Callable[[], tuple[Sequence[Any], Any]], 
     :data:`PREFETCH_WAIT` s, then builds it itself), loads the function from disk and logs it as
     ``"parallel"``.  A child that fails leaves nothing behind but a missing file: the name is then built
     here as if never prefetched.  The caller asks only for what its request needs (laziness holds).
+
+    ``prepare``, if given, is run here just before the fork, and only if a child is to be started: the
+    derivations both this process and the jobs need (their common prefix), done once and inherited by the
+    child, rather than twice — on two busy cores deriving them (and importing SymPy) in both processes cost
+    more CPU than the second core gave back.  It must derive only what this process's request needs anyway.
     """
     if (not hasattr(os, "fork") or not disk_cache_enabled() or (os.cpu_count() or 1) < 2
             or threading.active_count() > 1 or os.environ.get("MECHDERIVE_PARALLEL", "1") == "0"):
@@ -275,6 +281,10 @@ def prefetch(jobs: Sequence[tuple[str, Callable[[], tuple[Sequence[Any], Any]], 
             and not _path(n, m).exists()]
     if not todo:
         return False
+    if prepare is not None:
+        prepare()
+        if threading.active_count() > 1:  # pragma: no cover - a derivation started a thread: no fork
+            return False
     sys.stdout.flush()
     sys.stderr.flush()
     pid = os.fork()

@@ -211,6 +211,17 @@ def _estimate(top: Any, t: np.ndarray, names: list[str], scaled: "Scaled") -> fl
                float(np.ldexp(top.error_estimate(t, rates), scaled.rate)) if rates else 0.0)
 
 
+def _shared_prefix() -> None:
+    """Derive what both u(t)'s constants (f(u) (3.73) through the Routhian) and φ̇, ψ̇ (3.74)–(3.75) are
+    derived from — the Lagrangian, the conserved momenta and the cyclic velocities solved from them — once,
+    in this process, before :func:`~mechderive.core.codecache.prefetch` forks the child that takes φ̇, ψ̇
+    from there (both processes derived them before: ~40% of a cold start's CPU time, doubled)."""
+    from . import model as hm
+
+    m = hm.model()
+    _ = m.cyclic_velocities, m.momenta_in_ab
+
+
 def _exact(scene: "Scene", t: np.ndarray) -> Solved:
     from ..scaling import keys_text, units_of
     from .exact import exact_heavy_top
@@ -223,7 +234,7 @@ def _exact(scene: "Scene", t: np.ndarray) -> Solved:
         from ...core.codecache import prefetch
         from .exact import angle_function_jobs
 
-        prefetch(angle_function_jobs(angles=angles))
+        prefetch(angle_function_jobs(angles=angles), prepare=_shared_prefix)
     try:
         # over the scene's span the constants are set up in extended precision where their measured errors
         # allow (no mpmath imported: most of a warm run's solve stage was mpmath's import and 40-digit setup)
