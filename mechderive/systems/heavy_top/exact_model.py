@@ -88,7 +88,7 @@ class HeavyTopExactModel(SymbolicModel):
     def cubic_in_roots(self) -> sp.Expr:
         """f(u) = c3 (u - u1)(u - u2)(u - u3), with c3 f's leading coefficient (which must be β)."""
         c3 = heavy_model.model().f_coefficients[0]
-        if sp.simplify(c3 - heavy_model.beta) != 0:
+        if not _is_zero_rational(c3 - heavy_model.beta):
             raise DerivationError(f"expected f(u)'s leading coefficient β, got {c3}")
         u = heavy_model.u
         return c3 * (u - u1) * (u - u2) * (u - u3)
