@@ -38,18 +38,27 @@ _x = sp.Symbol("x", nonnegative=True)  # sn²
 
 
 def _is_zero_rational(expr: sp.Expr) -> bool:
-    """Whether ``expr`` is identically 0: by :func:`sympy.cancel` (exact and fast for the rational functions of
-    the roots and constants met here), else by :func:`sympy.simplify` (slow, for anything else).
+    """Whether ``expr`` is identically 0: exactly, in the field of rational functions of its symbols, when it
+    is one (the roots, constants and rates met here are); else by :func:`sympy.simplify` (slow).
 
-    For a rational function of its symbols cancel's answer is final either way — it brings p/q to lowest
-    terms, and p/q ≡ 0 iff p is the zero polynomial — so simplify is only tried on anything else (it took
-    ~0.15 s a call to confirm that two distinct poles n_i of the partial fractions differ)."""
-    expr = sp.cancel(expr)
-    if expr == 0:
-        return True
-    if expr.is_rational_function(*expr.free_symbols):
-        return False
-    return sp.simplify(expr) == 0
+    Each term is brought into the field Q(symbols) and the terms added there: a rational function is 0 iff
+    its reduced numerator is the zero polynomial, decided by the field's sparse polynomial arithmetic
+    without expanding expressions (:func:`sympy.cancel` of the same sum, together-ed, spent most of a
+    partial-fraction derivation's time in Expr-level expansion, and the simplify it fell back on ~0.15 s to
+    confirm that two distinct poles differ)."""
+    from sympy.polys.fields import field
+
+    expr = sp.sympify(expr)
+    symbols = sorted(expr.free_symbols, key=sp.default_sort_key)
+    if not symbols:
+        return expr == 0
+    if expr.is_rational_function(*symbols):
+        K = field(symbols, sp.QQ)[0]
+        total = K.zero
+        for term in sp.Add.make_args(expr):
+            total += K.from_expr(term)
+        return total == 0
+    return sp.cancel(expr) == 0 or sp.simplify(expr) == 0
 
 
 def _simple_poles(along: sp.Expr, x: sp.Symbol) -> tuple[sp.Expr, list[tuple[sp.Expr, sp.Expr]]]:
@@ -76,7 +85,7 @@ def _simple_poles(along: sp.Expr, x: sp.Symbol) -> tuple[sp.Expr, list[tuple[sp.
             terms.append((c, n))
     terms = [(sp.factor(c), n) for c, n in terms]
     rebuilt = c0 + sum(c / (1 - n * x) for c, n in terms)
-    if not _is_zero_rational(sp.together(rebuilt - along)):
+    if not _is_zero_rational(rebuilt - along):
         raise DerivationError("partial fractions do not reproduce the rate")
     return sp.factor(c0), terms
 
@@ -116,10 +125,33 @@ class HeavyTopExactModel(SymbolicModel):
         return {"kappa2": kappa_sq, "m": m, "m1": sp.factor(1 - m)}
 
     def _partial_fractions(self, rate_u: sp.Expr) -> dict:
-        """rate(u) along the ansatz as c0 + Σ c_i/(1 - n_i x), x = sn²; returns {"c0": .., "terms": [(c_i, n_i)]}."""
+        """rate(u) along the ansatz as c0 + Σ c_i/(1 - n_i x), x = sn²; returns {"c0": .., "terms": [(c_i, n_i)]}.
+
+        The partial fractions are taken in u, where the rate is a rational function of one variable with
+        linear poles (3.74)–(3.75) — fast — rather than in x after substituting the ansatz (a rational
+        function of x, u1, u2, a, b, …: SymPy's apart solved for undetermined coefficients there, ~0.3 s a
+        rate).  The ansatz is linear in x, so each pole maps to one: C/(p u + q) along u = u1 + (u2 − u1) x
+        is [C/(p u1 + q)] / (1 − n x) with n = −p (u2 − u1)/(p u1 + q); distinct poles in u give distinct n.
+        The result is checked to reproduce the rate along the ansatz identically."""
         u = heavy_model.u
-        c0, terms = _simple_poles(sp.together(rate_u.subs(u, u1 + (u2 - u1) * _x)), _x)
-        return {"c0": c0, "terms": terms}
+        c0, terms = sp.Integer(0), []
+        for term in sp.Add.make_args(sp.apart(sp.together(rate_u), u)):
+            num, den = sp.fraction(sp.factor(term))
+            if not den.has(u):
+                c0 += term
+                continue
+            poly = sp.Poly(den, u)
+            if poly.degree() != 1 or num.has(u):
+                raise DerivationError(f"expected simple poles in u with constant numerators, got {term}")
+            p, q = poly.all_coeffs()
+            at_u1 = p * u1 + q
+            terms.append((sp.factor(num / at_u1), sp.factor(-p * (u2 - u1) / at_u1)))
+        along = rate_u.subs(u, u1 + (u2 - u1) * _x)
+        if not _is_zero_rational(c0 + sum(c / (1 - n * _x) for c, n in terms) - along):
+            raise DerivationError("partial fractions do not reproduce the rate")
+        # in a fixed order (of n), whatever order apart lists its terms in
+        terms.sort(key=lambda cn: sp.default_sort_key(cn[1]))
+        return {"c0": sp.factor(c0), "terms": terms}
 
     @derived
     def f_taylor_state(self) -> tuple[sp.Expr, ...]:
