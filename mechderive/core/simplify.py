@@ -19,7 +19,7 @@ import sympy as sp
 
 from .symbols import as_symbolic
 
-__all__ = ["trig_normal", "is_zero", "simplify_trig"]
+__all__ = ["trig_normal", "is_zero", "simplify_trig", "TrigField"]
 
 
 def _trig_symbols(expr: sp.Expr) -> tuple[sp.Expr, dict, dict, list]:
@@ -77,6 +77,49 @@ def trig_normal(expr: Any) -> sp.Expr:
     den_sym, _, back_d, rels_d = _trig_symbols(den)
     den_r = _reduce_poly(den_sym, rels_d)
     return num_r.subs(back) / den_r.subs(back_d)
+
+
+class TrigField:
+    """Rational functions of the sines, cosines and symbols of some expressions, as elements of a field, and
+    their trig normal form: arithmetic (substituting into a polynomial, Horner's scheme, …) done by SymPy's
+    sparse polynomials instead of on expressions that are then expanded, simplified and normalised.
+
+    ``TrigField(exprs)`` takes the angles and symbols of ``exprs``; ``F(expr)`` is an element (``expr`` in
+    those only, a rational function of them); ``F.normal(element)`` is the same expression as
+    :func:`trig_normal` gives for the element's value, up to how a constant factor is shared between the
+    numerator and the denominator (numerator and denominator reduced modulo cos²x + sin²x − 1, in the order
+    of :func:`trig_normal`: no cos²x is left).
+    """
+
+    def __init__(self, exprs: Any) -> None:
+        from sympy.polys.fields import field
+
+        exprs = [sp.expand_trig(as_symbolic(e)) for e in exprs]
+        angles = sorted({f.args[0] for e in exprs for f in e.atoms(sp.sin, sp.cos)}, key=sp.default_sort_key)
+        self._fwd, self._back, trig = {}, {}, []
+        for i, x in enumerate(angles):
+            c, s = sp.Dummy(f"c{i}"), sp.Dummy(f"s{i}")
+            self._fwd[sp.cos(x)], self._fwd[sp.sin(x)] = c, s
+            self._back[c], self._back[s] = sp.cos(x), sp.sin(x)
+            trig += [c, s]
+        others = sorted(set().union(*(e.free_symbols for e in exprs)), key=sp.default_sort_key)
+        # lex order with each c before its s and before every other symbol: c² leads c² + s² − 1
+        self.field = field([*trig, *others], sp.QQ)[0]
+        ring = self.field.ring
+        gens = dict(zip([*trig, *others], ring.gens))
+        self._basis = [gens[c] ** 2 + gens[s] ** 2 - 1 for c, s in zip(trig[::2], trig[1::2])]
+
+    def __call__(self, expr: Any) -> Any:
+        return self.field.from_expr(sp.expand_trig(as_symbolic(expr)).xreplace(self._fwd))
+
+    def normal(self, element: Any) -> sp.Expr:
+        """The element as an expression: its numerator and denominator reduced modulo cos² + sin² − 1."""
+        num, den = element.numer, element.denom
+        if self._basis:
+            num, den = num.rem(self._basis), den.rem(self._basis)
+        if not num:
+            return sp.Integer(0)
+        return num.as_expr().xreplace(self._back) / den.as_expr().xreplace(self._back)
 
 
 def is_zero(expr: Any) -> bool | None:

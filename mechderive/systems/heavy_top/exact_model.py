@@ -26,7 +26,7 @@ import functools
 import sympy as sp
 
 from ...core.model import SymbolicModel, derived
-from ...core.simplify import trig_normal
+from ...core.simplify import TrigField, trig_normal
 from ...errors import DerivationError
 from . import model as heavy_model
 
@@ -163,10 +163,22 @@ class HeavyTopExactModel(SymbolicModel):
         leaves 1e-12 of it).  The constant term is f(u0) = sin²θ0 θ̇0² (the energy at the start).
         """
         hm = heavy_model
-        w = sp.Symbol("w", real=True)
-        shifted = sp.Poly(sp.expand(hm.model().f_u.subs(hm.u, sp.cos(hm.theta) + w)), w)
-        cfs = hm.model().constants_from_state
-        coeffs = tuple(sp.factor(trig_normal(c.subs(cfs))) for c in shifted.all_coeffs())
+        m = hm.model()
+        cfs = m.constants_from_state
+        # f's coefficients (in a, b, α, β) and u0 = cos θ0 in the state, as rational functions of cos θ, sin θ and
+        # the symbols; f(u0 + w)'s coefficients by Horner's scheme there (dividing f by u − u0 again and again
+        # leaves f(u0), f'(u0), f''(u0)/2, …): no expression is expanded, substituted into or simplified on the
+        # way (that was most of a cold start's time here); the trig normal form at the end, as trig_normal's
+        F = TrigField([*cfs.values(), sp.cos(hm.theta)])
+        remaining = [F(c.xreplace(cfs)) for c in m.f_polynomial.all_coeffs()]  # highest power first
+        u0, taylor = F(sp.cos(hm.theta)), []
+        while remaining:
+            partial = []
+            for c in remaining:
+                partial.append(c if not partial else partial[-1] * u0 + c)
+            taylor.append(partial.pop())  # the remainder of the division by u − u0
+            remaining = partial
+        coeffs = tuple(sp.factor(F.normal(c)) for c in reversed(taylor))
         if len(coeffs) != 4:
             raise DerivationError(f"expected a cubic f(u0 + w), got coefficients {coeffs}")
         return coeffs
