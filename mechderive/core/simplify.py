@@ -16,10 +16,11 @@ from __future__ import annotations
 from typing import Any
 
 import sympy as sp
+from sympy.polys.polyerrors import BasePolynomialError
 
 from .symbols import as_symbolic
 
-__all__ = ["trig_normal", "is_zero", "simplify_trig", "TrigField"]
+__all__ = ["trig_normal", "is_zero", "simplify_trig", "TrigField", "is_zero_rational"]
 
 
 def _trig_symbols(expr: sp.Expr) -> tuple[sp.Expr, dict, dict, list]:
@@ -69,6 +70,13 @@ def trig_normal(expr: Any) -> sp.Expr:
     ratio of reduced polynomials; it is 0 iff ``expr`` is identically 0.
     """
     expr = sp.expand_trig(as_symbolic(expr))
+    try:
+        # by arithmetic in the field of rational functions of the cosines, sines and symbols: no expression
+        # is expanded or put over a common denominator; the fraction comes out in lowest terms
+        field = TrigField([expr])
+        return field.normal(field(expr))
+    except (ValueError, BasePolynomialError):  # atoms other than symbols (Derivative(α(t), t), …), floats
+        pass
     num, den = sp.fraction(sp.together(expr))
     sym, _, back, rels = _trig_symbols(num)
     num_r = _reduce_poly(sym, rels)
@@ -95,6 +103,8 @@ class TrigField:
         from sympy.polys.fields import field
 
         exprs = [sp.expand_trig(as_symbolic(e)) for e in exprs]
+        if any(e.atoms(sp.Float) for e in exprs):  # the field's rationals would replace them by fractions
+            raise ValueError("expected exact numbers in a TrigField, got floats")
         angles = sorted({f.args[0] for e in exprs for f in e.atoms(sp.sin, sp.cos)}, key=sp.default_sort_key)
         self._fwd, self._back, trig = {}, {}, []
         for i, x in enumerate(angles):
@@ -137,6 +147,30 @@ def is_zero(expr: Any) -> bool | None:
     if not _is_rational_in_symbols(sym):
         return None
     return _reduce_poly(sym, rels) == 0
+
+
+def is_zero_rational(expr: Any) -> bool | None:
+    """Whether a rational function of symbols is identically zero, decided exactly; ``None`` if ``expr`` is
+    not one (sines, square roots, …: the caller decides otherwise).
+
+    Each term is brought into the field Q(symbols) and the terms are added there: a rational function is 0
+    iff its reduced numerator is the zero polynomial, found by the field's sparse polynomial arithmetic
+    without expanding expressions (:func:`sympy.cancel` of the together-ed sum spent most of its time in
+    Expr-level expansion: several times slower on the heavy top's partial fractions).
+    """
+    from sympy.polys.fields import field
+
+    expr = as_symbolic(expr)
+    symbols = sorted(expr.free_symbols, key=sp.default_sort_key)
+    if not expr.is_rational_function(*symbols):
+        return None
+    if not symbols:
+        return expr == 0
+    K = field(symbols, sp.QQ)[0]
+    total = K.zero
+    for term in sp.Add.make_args(expr):
+        total += K.from_expr(term)
+    return total == 0
 
 
 def _is_rational_in_symbols(expr: sp.Expr) -> bool:

@@ -26,7 +26,7 @@ import functools
 import sympy as sp
 
 from ...core.model import SymbolicModel, derived
-from ...core.simplify import TrigField, trig_normal
+from ...core.simplify import TrigField, is_zero_rational, trig_normal
 from ...errors import DerivationError
 from . import model as heavy_model
 
@@ -39,25 +39,13 @@ _x = sp.Symbol("x", nonnegative=True)  # sn²
 
 def _is_zero_rational(expr: sp.Expr) -> bool:
     """Whether ``expr`` is identically 0: exactly, in the field of rational functions of its symbols, when it
-    is one (the roots, constants and rates met here are); else by :func:`sympy.simplify` (slow).
-
-    Each term is brought into the field Q(symbols) and the terms added there: a rational function is 0 iff
-    its reduced numerator is the zero polynomial, decided by the field's sparse polynomial arithmetic
-    without expanding expressions (:func:`sympy.cancel` of the same sum, together-ed, spent most of a
-    partial-fraction derivation's time in Expr-level expansion, and the simplify it fell back on ~0.15 s to
-    confirm that two distinct poles differ)."""
-    from sympy.polys.fields import field
-
-    expr = sp.sympify(expr)
-    symbols = sorted(expr.free_symbols, key=sp.default_sort_key)
-    if not symbols:
-        return expr == 0
-    if expr.is_rational_function(*symbols):
-        K = field(symbols, sp.QQ)[0]
-        total = K.zero
-        for term in sp.Add.make_args(expr):
-            total += K.from_expr(term)
-        return total == 0
+    is one (the roots, constants and rates met here are: :func:`~mechderive.core.simplify.is_zero_rational`);
+    else by :func:`sympy.simplify` (slow).  (cancel of the together-ed sum spent most of a partial-fraction
+    derivation's time in Expr-level expansion, and the simplify it fell back on ~0.15 s to confirm that two
+    distinct poles differ.)"""
+    decided = is_zero_rational(expr)
+    if decided is not None:
+        return decided
     return sp.cancel(expr) == 0 or sp.simplify(expr) == 0
 
 
