@@ -359,7 +359,11 @@ def cached_lambdify(name: str, build: Callable[[], tuple[Sequence[Any], Any]], *
             shape, flat = arr.shape, list(arr.ravel())
         else:
             shape, flat = (), [exprs]
-        func = sp.lambdify(list(args), flat, modules=module, cse=True)
+        # the module object, not its name: lambdify then prints for it just the same (the printer is chosen by
+        # the module's name) and takes its namespace as it is — by name it runs "from numpy import *", whose
+        # lazily loaded submodules (numpy.testing, numpy.f2py, …) took ~0.3 s of a cold start.  The function
+        # gets the globals a disk-cached one is loaded into (_load: the module's own namespace)
+        func = sp.lambdify(list(args), flat, modules=importlib.import_module(module), cse=True)
         meta = {"shape": ",".join(map(str, shape)), "args": ",".join(str(a) for a in args)}
         if disk:
             _store(name, module, inspect.getsource(func), meta)
