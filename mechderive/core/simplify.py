@@ -20,7 +20,7 @@ from sympy.polys.polyerrors import BasePolynomialError
 
 from .symbols import as_symbolic
 
-__all__ = ["trig_normal", "is_zero", "simplify_trig", "TrigField", "is_zero_rational"]
+__all__ = ["trig_normal", "is_zero", "simplify_trig", "TrigField", "is_zero_rational", "as_fraction"]
 
 
 def _trig_symbols(expr: sp.Expr) -> tuple[sp.Expr, dict, dict, list]:
@@ -147,6 +147,21 @@ def is_zero(expr: Any) -> bool | None:
     if not _is_rational_in_symbols(sym):
         return None
     return _reduce_poly(sym, rels) == 0
+
+
+def as_fraction(expr: Any) -> sp.Expr:
+    """A rational function of symbols as one fraction p/q in lowest terms (what :func:`sympy.cancel` gives, up
+    to how a constant is shared between p and q), by the arithmetic of the field Q(symbols) — no expression is
+    expanded or put over a common denominator on the way; anything else goes to :func:`sympy.cancel`."""
+    from sympy.polys.fields import field
+
+    expr = as_symbolic(expr)
+    symbols = sorted(expr.free_symbols, key=sp.default_sort_key)
+    if not symbols or expr.atoms(sp.Float) or not expr.is_rational_function(*symbols):
+        return sp.cancel(expr)
+    K = field(symbols, sp.QQ)[0]
+    value = K.from_expr(expr)
+    return value.numer.as_expr() / value.denom.as_expr()
 
 
 def is_zero_rational(expr: Any) -> bool | None:

@@ -44,7 +44,7 @@ import sympy as sp
 
 from ...core.lagrangian import LagrangianModel, from_state_symbols, vanishes
 from ...core.model import derived
-from ...core.simplify import is_zero_rational, trig_normal
+from ...core.simplify import as_fraction, is_zero_rational, trig_normal
 from ...core.symbols import as_symbolic, euler_angles, state_symbol, t, to_state_symbols
 from ...errors import DerivationError
 from ...kinematics import euler as _euler
@@ -92,13 +92,14 @@ def _in_u(expr: sp.Expr) -> sp.Expr:
     sin_sq = lambda x: x.is_Pow and x.base == sp.sin(theta) and x.exp.is_Integer and x.exp.is_even  # noqa: E731
     direct = expr.xreplace({sp.cos(theta): u}).replace(sin_sq, lambda x: (1 - u**2) ** (x.exp // 2))
     if direct.has(theta):  # an odd power of sin θ, or θ elsewhere: the general route
-        direct = expr.subs(theta, sp.acos(u))
-    return sp.factor(sp.cancel(direct))
+        return sp.factor(sp.cancel(expr.subs(theta, sp.acos(u))))
+    return sp.factor(as_fraction(direct))
 
 
 def _over_one_minus_u2(expr: sp.Expr) -> sp.Expr:
-    """A rational function of u over (1 − u²), as one fraction or as (polynomial) + N(u)/(1 − u²), the shorter."""
-    expr = sp.factor(sp.cancel(sp.together(expr)))
+    """A rational function of u over (1 − u²), as one fraction or as (polynomial) + N(u)/(1 − u²), the shorter.
+
+    ``expr`` as :func:`_in_u` gives it: one fraction, factored (not factored again: that was half the time)."""
     num, den = sp.fraction(expr)
     scale = sp.cancel(den / (1 - u**2))
     if scale.has(u):
