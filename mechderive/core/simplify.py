@@ -142,6 +142,11 @@ def is_zero(expr: Any) -> bool | None:
     """
     expr = as_symbolic(expr).replace(sp.tan, lambda x: sp.sin(x) / sp.cos(x))
     expr = sp.expand_trig(expr)
+    try:  # in the field of rational functions of the cosines, sines and symbols (see trig_normal)
+        field = TrigField([expr])
+        return field.normal(field(expr)) == 0
+    except (ValueError, BasePolynomialError):  # other atoms, floats: by expressions, or undecided
+        pass
     num, _ = sp.fraction(sp.together(expr))
     sym, _, _, rels = _trig_symbols(num)
     if not _is_rational_in_symbols(sym):
