@@ -123,7 +123,7 @@ class HeavyTopExactModel(SymbolicModel):
         The result is checked to reproduce the rate along the ansatz identically."""
         u = heavy_model.u
         c0, terms = sp.Integer(0), []
-        for term in sp.Add.make_args(sp.apart(sp.together(rate_u), u)):
+        for term in sp.Add.make_args(heavy_model.partial_fractions_in_u(rate_u)):
             num, den = sp.fraction(sp.factor(term))
             if not den.has(u):
                 c0 += term

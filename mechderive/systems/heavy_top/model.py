@@ -96,6 +96,14 @@ def _in_u(expr: sp.Expr) -> sp.Expr:
     return sp.factor(as_fraction(direct))
 
 
+@functools.lru_cache(maxsize=8)
+def partial_fractions_in_u(rate: sp.Expr) -> sp.Expr:
+    """``rate``, a rational function of u, in partial fractions in u (SymPy's apart): shared by the rates near
+    the poles (:attr:`HeavyTopModel.rates_near_poles`) and their partial fractions along the nutation
+    (:mod:`.exact_model`), which take the same decomposition of φ̇ (3.74) and ψ̇ (3.75)."""
+    return sp.apart(sp.together(rate), u)
+
+
 def _over_one_minus_u2(expr: sp.Expr) -> sp.Expr:
     """A rational function of u over (1 − u²), as one fraction or as (polynomial) + N(u)/(1 − u²), the shorter.
 
@@ -302,7 +310,7 @@ class HeavyTopModel(LagrangianModel):
         x, y, dm, dp = sp.symbols("x_pole y_bottom d_minus d_plus", real=True)
         out = []
         for rate in (self.precession_rate_u, self.spin_rate_u):
-            parts = sp.apart(sp.together(rate), u).xreplace({u - 1: -x, u + 1: y})
+            parts = partial_fractions_in_u(rate).xreplace({u - 1: -x, u + 1: y})
             parts = sp.expand(parts.subs({a: (dp - dm) / 2, b: (dp + dm) / 2}))
             if parts.has(u):
                 raise DerivationError(f"expected the rate in 1 − u and 1 + u only, got {parts}")
