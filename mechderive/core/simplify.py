@@ -18,6 +18,7 @@ from typing import Any
 import sympy as sp
 from sympy.polys.polyerrors import BasePolynomialError
 
+from ..errors import InvalidInputError
 from .symbols import as_symbolic
 
 __all__ = ["trig_normal", "is_zero", "simplify_trig", "TrigField", "is_zero_rational", "as_fraction"]
@@ -104,7 +105,7 @@ class TrigField:
 
         exprs = [sp.expand_trig(as_symbolic(e)) for e in exprs]
         if any(e.atoms(sp.Float) for e in exprs):  # the field's rationals would replace them by fractions
-            raise ValueError("expected exact numbers in a TrigField, got floats")
+            raise InvalidInputError("expected exact numbers in a TrigField, got floats")
         angles = sorted({f.args[0] for e in exprs for f in e.atoms(sp.sin, sp.cos)}, key=sp.default_sort_key)
         self._fwd, self._back, trig = {}, {}, []
         for i, x in enumerate(angles):
