@@ -99,12 +99,26 @@ class HeavyTopExactModel(SymbolicModel):
         k2, p = sp.symbols("K2 P")
         ansatz = u1 + (u2 - u1) * sn**2
         u_dot_sq = 4 * (u2 - u1) ** 2 * sn**2 * cn**2 * dn**2 * k2  # (d/dt of the ansatz)², κ² = K2
-        residual = sp.expand((u_dot_sq - self.cubic_in_roots.subs(u, ansatz))
-                             .subs({cn**2: 1 - sn**2, dn**2: 1 - _m * sn**2}))
-        residual = sp.expand(sp.expand(residual.subs(sn, sp.sqrt(_x))).subs(k2 * _m, p))
-        if _m in residual.free_symbols:
-            raise DerivationError(f"expected m only in κ² m in the nutation identity, got {residual}")
-        coeffs = sp.Poly(residual, _x).all_coeffs()
+        # the identity as a polynomial in x = sn² over the roots, β, K2 and m (cn² = 1 − x, dn² = 1 − m x): by
+        # SymPy's sparse polynomials, composing f's factored form with the ansatz, instead of substituting into
+        # and expanding expressions (most of this derivation's time)
+        R = sp.polys.rings.ring([_x, _m, k2, p, *sorted(self.cubic_in_roots.free_symbols - {u}, key=str), u],
+                                sp.QQ)[0]
+        x_sq = {sn**2: _x, cn**2: 1 - _x, dn**2: 1 - _m * _x}
+        lhs = R.from_expr(sp.Mul(*[x_sq.get(f, f) for f in sp.Mul.make_args(u_dot_sq)]))
+        cubic = R.from_expr(self.cubic_in_roots).compose(R(u), R.from_expr(ansatz.xreplace(x_sq)))
+        residual = R.zero
+        i_m, i_k2 = R.gens.index(R(_m)), R.gens.index(R(k2))
+        for monom, coeff in (lhs - cubic).terms():
+            if monom[i_m] != monom[i_k2] * (monom[i_m] > 0):  # m only in κ² m
+                raise DerivationError(f"expected m only in κ² m in the nutation identity, got {(lhs - cubic)}")
+            # κ² m → P (linear in the unknowns)
+            moved = list(monom)
+            if monom[i_m]:
+                moved[i_m], moved[i_k2] = 0, 0
+                moved[R.gens.index(R(p))] = monom[i_m]
+            residual += R({tuple(moved): coeff})
+        coeffs = sp.Poly(residual.as_expr(), _x).all_coeffs()
         sol = list(sp.linsolve([c for c in coeffs if c != 0], [k2, p]))
         if len(sol) != 1 or any(v.free_symbols & {k2, p} for v in sol[0]):
             raise DerivationError(f"expected one (κ², κ² m) for the nutation ansatz, got {sol}")
