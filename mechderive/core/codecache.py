@@ -301,10 +301,14 @@ def prefetch(jobs: Sequence[tuple[str, Callable[[], tuple[Sequence[Any], Any]], 
     return True
 
 
-def _wait_for(pid: int) -> None:
-    """Wait for the prefetching child ``pid`` (reaped once; later waits return at once), at most PREFETCH_WAIT s."""
+def _wait_for(pid: int, published: Path | None = None) -> None:
+    """Wait for the prefetching child ``pid`` until it has published ``published`` (it builds its jobs in
+    turn, atomically each: the first ones are ready before the last are done) or has exited (reaped once;
+    later waits return at once), at most PREFETCH_WAIT s."""
     deadline = time.monotonic() + PREFETCH_WAIT
     while True:
+        if published is not None and published.exists():
+            return
         try:
             done, _ = os.waitpid(pid, os.WNOHANG)
         except ChildProcessError:  # reaped already (another of its names)
@@ -339,7 +343,7 @@ def cached_lambdify(name: str, build: Callable[[], tuple[Sequence[Any], Any]], *
     disk = disk_cache_enabled()
     child = _PREFETCH.pop(key, None)
     if child is not None:
-        _wait_for(child)
+        _wait_for(child, _path(name, module) if disk else None)
     loaded = _load(name, module) if disk else None
     if loaded is not None:
         how = "parallel" if child is not None else "disk"
