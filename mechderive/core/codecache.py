@@ -344,6 +344,8 @@ def cached_lambdify(name: str, build: Callable[[], tuple[Sequence[Any], Any]], *
     child = _PREFETCH.pop(key, None)
     if child is not None:
         _wait_for(child, _path(name, module) if disk else None)
+        if child not in _PREFETCH.values():  # its last job: reaped (it exits right after publishing it)
+            _wait_for(child)
     loaded = _load(name, module) if disk else None
     if loaded is not None:
         how = "parallel" if child is not None else "disk"
