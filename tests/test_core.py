@@ -8,7 +8,7 @@ import sympy as sp
 
 from mechderive.core import compile as cc
 from mechderive.core.model import SymbolicModel, derived
-from mechderive.core.simplify import is_zero, simplify_trig, trig_normal
+from mechderive.core.simplify import TrigField, is_zero, simplify_trig, trig_normal
 from mechderive.core.validate import as_finite_array, check_positive
 from mechderive.errors import InvalidInputError, NonFiniteValueError, ShapeError
 from mechderive.kinematics.euler import KinematicsModel
@@ -115,6 +115,24 @@ def test_trig_normal_and_simplify_trig():
     a = sp.Symbol("a", real=True)
     assert trig_normal(sp.cos(a) ** 2 + sp.sin(a) ** 2) == 1
     assert simplify_trig((1 - sp.cos(a) ** 2) / sp.sin(a)) == sp.sin(a)
+    # several angles, reduced in turn: the normal form has no cos² of either
+    b, x, y = sp.symbols("b x y", real=True)
+    e = (x * sp.cos(a) ** 3 * sp.cos(b) ** 2 + y * sp.sin(a) * sp.cos(b)) / (x + y * sp.cos(a) ** 2)
+    n = trig_normal(e)
+    assert not n.has(sp.cos(a) ** 2) and not n.has(sp.cos(b) ** 2) and is_zero(n - e)
+
+
+def test_trig_field_arithmetic_gives_the_trig_normal_form():
+    """Substituting into a polynomial in the field, then normalising, is trig_normal of the substituted
+    expression (the same rational function, the same reduction: factored, the same expression)."""
+    a, t, x, y = sp.symbols("a t x y", real=True)
+    values = {x: (sp.cos(t) + a * sp.sin(t) ** 2) / a, y: a * sp.sin(t) * sp.cos(t) - sp.cos(t) ** 2}
+    poly = x**3 - 2 * x * y + y**2 / 3 + 1
+    F = TrigField(values.values())
+    got = F.normal(F(poly.xreplace(values)))
+    assert sp.factor(got) == sp.factor(trig_normal(poly.subs(values)))
+    assert not got.has(sp.cos(t) ** 2)
+    assert F.normal(F(sp.sin(t) ** 2 + sp.cos(t) ** 2 - 1)) == 0
 
 
 # --- validation ------------------------------------------------------------------------------

@@ -256,7 +256,8 @@ _PREFETCH: dict[str, int] = {}
 PREFETCH_WAIT = 120.0
 
 
-def prefetch(jobs: Sequence[tuple[str, Callable[[], tuple[Sequence[Any], Any]], str]]) -> bool:
+def prefetch(jobs: Sequence[tuple[str, Callable[[], tuple[Sequence[Any], Any]], str]],
+             prepare: Callable[[], Any] | None = None) -> bool:
     """Start building ``jobs`` ((name, build, module), as :func:`cached_lambdify` takes them) in a forked
     child process that writes them to the disk cache, while this process goes on with other derivations:
     a cold start uses a second core.  True if a child was started.
@@ -267,6 +268,11 @@ def prefetch(jobs: Sequence[tuple[str, Callable[[], tuple[Sequence[Any], Any]], 
     :data:`PREFETCH_WAIT` s, then builds it itself), loads the function from disk and logs it as
     ``"parallel"``.  A child that fails leaves nothing behind but a missing file: the name is then built
     here as if never prefetched.  The caller asks only for what its request needs (laziness holds).
+
+    ``prepare``, if given, is run here just before the fork, and only if a child is to be started: the
+    derivations both this process and the jobs need (their common prefix), done once and inherited by the
+    child, rather than twice — on two busy cores deriving them (and importing SymPy) in both processes cost
+    more CPU than the second core gave back.  It must derive only what this process's request needs anyway.
     """
     if (not hasattr(os, "fork") or not disk_cache_enabled() or (os.cpu_count() or 1) < 2
             or threading.active_count() > 1 or os.environ.get("MECHDERIVE_PARALLEL", "1") == "0"):
@@ -275,6 +281,10 @@ def prefetch(jobs: Sequence[tuple[str, Callable[[], tuple[Sequence[Any], Any]], 
             and not _path(n, m).exists()]
     if not todo:
         return False
+    if prepare is not None:
+        prepare()
+        if threading.active_count() > 1:  # pragma: no cover - a derivation started a thread: no fork
+            return False
     sys.stdout.flush()
     sys.stderr.flush()
     pid = os.fork()
@@ -291,10 +301,14 @@ def prefetch(jobs: Sequence[tuple[str, Callable[[], tuple[Sequence[Any], Any]], 
     return True
 
 
-def _wait_for(pid: int) -> None:
-    """Wait for the prefetching child ``pid`` (reaped once; later waits return at once), at most PREFETCH_WAIT s."""
+def _wait_for(pid: int, published: Path | None = None) -> None:
+    """Wait for the prefetching child ``pid`` until it has published ``published`` (it builds its jobs in
+    turn, atomically each: the first ones are ready before the last are done) or has exited (reaped once;
+    later waits return at once), at most PREFETCH_WAIT s."""
     deadline = time.monotonic() + PREFETCH_WAIT
     while True:
+        if published is not None and published.exists():
+            return
         try:
             done, _ = os.waitpid(pid, os.WNOHANG)
         except ChildProcessError:  # reaped already (another of its names)
@@ -329,7 +343,9 @@ def cached_lambdify(name: str, build: Callable[[], tuple[Sequence[Any], Any]], *
     disk = disk_cache_enabled()
     child = _PREFETCH.pop(key, None)
     if child is not None:
-        _wait_for(child)
+        _wait_for(child, _path(name, module) if disk else None)
+        if child not in _PREFETCH.values():  # its last job: reaped (it exits right after publishing it)
+            _wait_for(child)
     loaded = _load(name, module) if disk else None
     if loaded is not None:
         how = "parallel" if child is not None else "disk"
@@ -349,7 +365,11 @@ def cached_lambdify(name: str, build: Callable[[], tuple[Sequence[Any], Any]], *
             shape, flat = arr.shape, list(arr.ravel())
         else:
             shape, flat = (), [exprs]
-        func = sp.lambdify(list(args), flat, modules=module, cse=True)
+        # the module object, not its name: lambdify then prints for it just the same (the printer is chosen by
+        # the module's name) and takes its namespace as it is — by name it runs "from numpy import *", whose
+        # lazily loaded submodules (numpy.testing, numpy.f2py, …) took ~0.3 s of a cold start.  The function
+        # gets the globals a disk-cached one is loaded into (_load: the module's own namespace)
+        func = sp.lambdify(list(args), flat, modules=importlib.import_module(module), cse=True)
         meta = {"shape": ",".join(map(str, shape)), "args": ",".join(str(a) for a in args)}
         if disk:
             _store(name, module, inspect.getsource(func), meta)

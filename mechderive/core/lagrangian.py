@@ -316,7 +316,8 @@ class LagrangianModel(SymbolicModel):
         """R = L − Σ_c p_c q̇_c with the cyclic velocities eliminated: a Lagrangian of the rest, p_c as parameters."""
         p = self.momentum_symbols
         R = self.state_lagrangian - sum(p[q] * self.velocities[self._index(q)] for q in self.cyclic_coordinates)
-        R = trig_normal(R.subs(self.cyclic_velocities))
+        # the keys are the velocity symbols themselves: replacing those nodes (xreplace) is the substitution
+        R = trig_normal(R.xreplace(self.cyclic_velocities))
         if R.has(*self.cyclic_velocities) or any(R.has(self.positions[self._index(q)]) for q in self.cyclic_coordinates):
             raise DerivationError(f"expected the Routhian free of the cyclic coordinates and velocities, got {R}")
         return _collect_velocities(R, self._remaining_velocities())

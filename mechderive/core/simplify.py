@@ -16,10 +16,12 @@ from __future__ import annotations
 from typing import Any
 
 import sympy as sp
+from sympy.polys.polyerrors import BasePolynomialError
 
+from ..errors import InvalidInputError
 from .symbols import as_symbolic
 
-__all__ = ["trig_normal", "is_zero", "simplify_trig"]
+__all__ = ["trig_normal", "is_zero", "simplify_trig", "TrigField", "is_zero_rational", "as_fraction"]
 
 
 def _trig_symbols(expr: sp.Expr) -> tuple[sp.Expr, dict, dict, list]:
@@ -30,18 +32,35 @@ def _trig_symbols(expr: sp.Expr) -> tuple[sp.Expr, dict, dict, list]:
         fwd[sp.cos(a)], fwd[sp.sin(a)] = c, s
         back[c], back[s] = sp.cos(a), sp.sin(a)
         rels.append((c, s))
-    return expr.subs(fwd), fwd, back, rels
+    # every sine and cosine in expr is one of the atoms just collected: replacing those very nodes
+    # (xreplace) is exact, and several times faster than subs' mathematical matching
+    return expr.xreplace(fwd), fwd, back, rels
 
 
 def _reduce_poly(p: sp.Expr, rels: list) -> sp.Expr:
-    p = sp.expand(p)
     if not rels:
-        return p
+        return sp.expand(p)
     gens = [g for pair in rels for g in pair]
-    basis = [c**2 + s**2 - 1 for c, s in rels]
-    # Other symbols are coefficients: reduce over the polynomial ring in the c, s only.
-    _, rem = sp.reduced(p, basis, *gens, order="lex")
-    return sp.expand(rem)
+    try:
+        # the polynomial in the c, s over the other symbols, expanded by Poly's own sparse arithmetic (much
+        # faster than sp.expand of the whole expression, which also multiplies out the coefficients)
+        poly = sp.Poly(p, *gens)
+    except sp.PolynomialError:  # pragma: no cover - not a polynomial in the c, s: the general route
+        poly = None
+    if poly is None or not poly.domain.is_Exact:
+        p = sp.expand(p)
+        basis = [c**2 + s**2 - 1 for c, s in rels]
+        _, rem = sp.reduced(p, basis, *gens, order="lex")
+        return sp.expand(rem)
+    # Other symbols are coefficients: reduce over the polynomial ring in the c, s only.  c² + s² − 1 for
+    # each angle is monic in c (lex, c > s): dividing by one per angle in turn leaves the unique normal form
+    # (no c² anywhere; reducing one angle's c never brings another's back).  The division is in the main
+    # generator, so each angle's c is put first in turn
+    for c, s in rels:
+        order = [c, *(g for g in gens if g != c)]
+        poly = poly.reorder(*order)
+        poly = poly.rem(sp.Poly(c**2 + s**2 - 1, *order, domain=poly.domain))
+    return sp.expand(poly.as_expr())
 
 
 def trig_normal(expr: Any) -> sp.Expr:
@@ -52,6 +71,18 @@ def trig_normal(expr: Any) -> sp.Expr:
     ratio of reduced polynomials; it is 0 iff ``expr`` is identically 0.
     """
     expr = sp.expand_trig(as_symbolic(expr))
+    if all(f.is_Number or f.is_Symbol or isinstance(f, (sp.sin, sp.cos))
+           or (isinstance(f, sp.Derivative) and not f.has(sp.sin, sp.cos)) for f in sp.Mul.make_args(expr)):
+        # a monomial with each sine and cosine to the first power (cos α, −sin α, α̇: the entries of R1, R3
+        # and their ṘRᵀ) is its own normal form; building a field for it took ~5 ms, 36 times in a cold start
+        return expr
+    try:
+        # by arithmetic in the field of rational functions of the cosines, sines and symbols: no expression
+        # is expanded or put over a common denominator; the fraction comes out in lowest terms
+        field = TrigField([expr])
+        return field.normal(field(expr))
+    except (ValueError, BasePolynomialError):  # atoms other than symbols (Derivative(α(t), t), …), floats
+        pass
     num, den = sp.fraction(sp.together(expr))
     sym, _, back, rels = _trig_symbols(num)
     num_r = _reduce_poly(sym, rels)
@@ -60,6 +91,51 @@ def trig_normal(expr: Any) -> sp.Expr:
     den_sym, _, back_d, rels_d = _trig_symbols(den)
     den_r = _reduce_poly(den_sym, rels_d)
     return num_r.subs(back) / den_r.subs(back_d)
+
+
+class TrigField:
+    """Rational functions of the sines, cosines and symbols of some expressions, as elements of a field, and
+    their trig normal form: arithmetic (substituting into a polynomial, Horner's scheme, …) done by SymPy's
+    sparse polynomials instead of on expressions that are then expanded, simplified and normalised.
+
+    ``TrigField(exprs)`` takes the angles and symbols of ``exprs``; ``F(expr)`` is an element (``expr`` in
+    those only, a rational function of them); ``F.normal(element)`` is the same expression as
+    :func:`trig_normal` gives for the element's value, up to how a constant factor is shared between the
+    numerator and the denominator (numerator and denominator reduced modulo cos²x + sin²x − 1, in the order
+    of :func:`trig_normal`: no cos²x is left).
+    """
+
+    def __init__(self, exprs: Any) -> None:
+        from sympy.polys.fields import field
+
+        exprs = [sp.expand_trig(as_symbolic(e)) for e in exprs]
+        if any(e.atoms(sp.Float) for e in exprs):  # the field's rationals would replace them by fractions
+            raise InvalidInputError("expected exact numbers in a TrigField, got floats")
+        angles = sorted({f.args[0] for e in exprs for f in e.atoms(sp.sin, sp.cos)}, key=sp.default_sort_key)
+        self._fwd, self._back, trig = {}, {}, []
+        for i, x in enumerate(angles):
+            c, s = sp.Dummy(f"c{i}"), sp.Dummy(f"s{i}")
+            self._fwd[sp.cos(x)], self._fwd[sp.sin(x)] = c, s
+            self._back[c], self._back[s] = sp.cos(x), sp.sin(x)
+            trig += [c, s]
+        others = sorted(set().union(*(e.free_symbols for e in exprs)), key=sp.default_sort_key)
+        # lex order with each c before its s and before every other symbol: c² leads c² + s² − 1
+        self.field = field([*trig, *others], sp.QQ)[0]
+        ring = self.field.ring
+        gens = dict(zip([*trig, *others], ring.gens))
+        self._basis = [gens[c] ** 2 + gens[s] ** 2 - 1 for c, s in zip(trig[::2], trig[1::2])]
+
+    def __call__(self, expr: Any) -> Any:
+        return self.field.from_expr(sp.expand_trig(as_symbolic(expr)).xreplace(self._fwd))
+
+    def normal(self, element: Any) -> sp.Expr:
+        """The element as an expression: its numerator and denominator reduced modulo cos² + sin² − 1."""
+        num, den = element.numer, element.denom
+        if self._basis:
+            num, den = num.rem(self._basis), den.rem(self._basis)
+        if not num:
+            return sp.Integer(0)
+        return num.as_expr().xreplace(self._back) / den.as_expr().xreplace(self._back)
 
 
 def is_zero(expr: Any) -> bool | None:
@@ -72,11 +148,55 @@ def is_zero(expr: Any) -> bool | None:
     """
     expr = as_symbolic(expr).replace(sp.tan, lambda x: sp.sin(x) / sp.cos(x))
     expr = sp.expand_trig(expr)
+    try:  # in the field of rational functions of the cosines, sines and symbols (see trig_normal)
+        field = TrigField([expr])
+        return field.normal(field(expr)) == 0
+    except (ValueError, BasePolynomialError):  # other atoms, floats: by expressions, or undecided
+        pass
     num, _ = sp.fraction(sp.together(expr))
     sym, _, _, rels = _trig_symbols(num)
     if not _is_rational_in_symbols(sym):
         return None
     return _reduce_poly(sym, rels) == 0
+
+
+def as_fraction(expr: Any) -> sp.Expr:
+    """A rational function of symbols as one fraction p/q in lowest terms (what :func:`sympy.cancel` gives, up
+    to how a constant is shared between p and q), by the arithmetic of the field Q(symbols) — no expression is
+    expanded or put over a common denominator on the way; anything else goes to :func:`sympy.cancel`."""
+    from sympy.polys.fields import field
+
+    expr = as_symbolic(expr)
+    symbols = sorted(expr.free_symbols, key=sp.default_sort_key)
+    if not symbols or expr.atoms(sp.Float) or not expr.is_rational_function(*symbols):
+        return sp.cancel(expr)
+    K = field(symbols, sp.QQ)[0]
+    value = K.from_expr(expr)
+    return value.numer.as_expr() / value.denom.as_expr()
+
+
+def is_zero_rational(expr: Any) -> bool | None:
+    """Whether a rational function of symbols is identically zero, decided exactly; ``None`` if ``expr`` is
+    not one (sines, square roots, …: the caller decides otherwise).
+
+    Each term is brought into the field Q(symbols) and the terms are added there: a rational function is 0
+    iff its reduced numerator is the zero polynomial, found by the field's sparse polynomial arithmetic
+    without expanding expressions (:func:`sympy.cancel` of the together-ed sum spent most of its time in
+    Expr-level expansion: several times slower on the heavy top's partial fractions).
+    """
+    from sympy.polys.fields import field
+
+    expr = as_symbolic(expr)
+    symbols = sorted(expr.free_symbols, key=sp.default_sort_key)
+    if not expr.is_rational_function(*symbols):
+        return None
+    if not symbols:
+        return expr == 0
+    K = field(symbols, sp.QQ)[0]
+    total = K.zero
+    for term in sp.Add.make_args(expr):
+        total += K.from_expr(term)
+    return total == 0
 
 
 def _is_rational_in_symbols(expr: sp.Expr) -> bool:
@@ -96,5 +216,10 @@ def simplify_trig(expr: Any) -> sp.Expr:
     Falls back to the normal form alone when ``trigsimp`` would make it longer.
     """
     normal = trig_normal(expr)
+    factors = [f for f in sp.Mul.make_args(normal) if not f.is_Number]
+    if len(factors) <= 1 and not (factors and (factors[0].is_Pow or factors[0].is_Add)):
+        # a number times at most one atom or function (cos α, −sin α, α̇: the entries of R1, R3 and their
+        # ṘRᵀ): nothing to shorten, and trigsimp took ~10 ms to say so, 18 times in a cold start
+        return normal
     nice = sp.trigsimp(sp.factor_terms(normal))
     return nice if sp.count_ops(nice) <= sp.count_ops(normal) else normal

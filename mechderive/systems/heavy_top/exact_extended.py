@@ -40,7 +40,7 @@ import numpy as np
 
 from ...core.phase import DD
 
-__all__ = ["setup", "angle_constants", "fraction_jobs", "EXTENDED", "TOLERANCE"]
+__all__ = ["setup", "angle_constants", "fraction_jobs", "gap_jobs", "EXTENDED", "TOLERANCE"]
 
 #: whether numpy.longdouble is wider than a double here (x87 extended precision on x86-64)
 EXTENDED = bool(np.finfo(np.longdouble).eps < 1e-18)
@@ -78,6 +78,14 @@ def fraction_jobs() -> list[tuple]:
 
     return [(f"heavy_top.{which}", _binary_checked(_fraction_build(which)), "numpy")
             for which in ("precession_fractions", "spin_fractions")]
+
+
+def gap_jobs() -> list[tuple]:
+    """(name, build, module) of b ∓ a from the state in half angles (:func:`_compiled`), the setup's last
+    derived constants, for :func:`mechderive.core.codecache.prefetch`; none where this setup is not taken."""
+    from .exact import _build_gaps
+
+    return [("heavy_top.passage_factors", _binary_checked(_build_gaps), "numpy")] if EXTENDED else []
 
 
 @functools.cache

@@ -26,7 +26,7 @@ import functools
 import sympy as sp
 
 from ...core.model import SymbolicModel, derived
-from ...core.simplify import trig_normal
+from ...core.simplify import TrigField, is_zero_rational, trig_normal
 from ...errors import DerivationError
 from . import model as heavy_model
 
@@ -38,8 +38,14 @@ _x = sp.Symbol("x", nonnegative=True)  # sn²
 
 
 def _is_zero_rational(expr: sp.Expr) -> bool:
-    """Whether ``expr`` is identically 0: by :func:`sympy.cancel` (exact and fast for the rational functions of
-    the roots and constants met here), else by :func:`sympy.simplify` (slow, for anything else)."""
+    """Whether ``expr`` is identically 0: exactly, in the field of rational functions of its symbols, when it
+    is one (the roots, constants and rates met here are: :func:`~mechderive.core.simplify.is_zero_rational`);
+    else by :func:`sympy.simplify` (slow).  (cancel of the together-ed sum spent most of a partial-fraction
+    derivation's time in Expr-level expansion, and the simplify it fell back on ~0.15 s to confirm that two
+    distinct poles differ.)"""
+    decided = is_zero_rational(expr)
+    if decided is not None:
+        return decided
     return sp.cancel(expr) == 0 or sp.simplify(expr) == 0
 
 
@@ -67,7 +73,7 @@ def _simple_poles(along: sp.Expr, x: sp.Symbol) -> tuple[sp.Expr, list[tuple[sp.
             terms.append((c, n))
     terms = [(sp.factor(c), n) for c, n in terms]
     rebuilt = c0 + sum(c / (1 - n * x) for c, n in terms)
-    if not _is_zero_rational(sp.together(rebuilt - along)):
+    if not _is_zero_rational(rebuilt - along):
         raise DerivationError("partial fractions do not reproduce the rate")
     return sp.factor(c0), terms
 
@@ -79,7 +85,7 @@ class HeavyTopExactModel(SymbolicModel):
     def cubic_in_roots(self) -> sp.Expr:
         """f(u) = c3 (u - u1)(u - u2)(u - u3), with c3 f's leading coefficient (which must be β)."""
         c3 = heavy_model.model().f_coefficients[0]
-        if sp.simplify(c3 - heavy_model.beta) != 0:
+        if not _is_zero_rational(c3 - heavy_model.beta):
             raise DerivationError(f"expected f(u)'s leading coefficient β, got {c3}")
         u = heavy_model.u
         return c3 * (u - u1) * (u - u2) * (u - u3)
@@ -93,12 +99,26 @@ class HeavyTopExactModel(SymbolicModel):
         k2, p = sp.symbols("K2 P")
         ansatz = u1 + (u2 - u1) * sn**2
         u_dot_sq = 4 * (u2 - u1) ** 2 * sn**2 * cn**2 * dn**2 * k2  # (d/dt of the ansatz)², κ² = K2
-        residual = sp.expand((u_dot_sq - self.cubic_in_roots.subs(u, ansatz))
-                             .subs({cn**2: 1 - sn**2, dn**2: 1 - _m * sn**2}))
-        residual = sp.expand(sp.expand(residual.subs(sn, sp.sqrt(_x))).subs(k2 * _m, p))
-        if _m in residual.free_symbols:
-            raise DerivationError(f"expected m only in κ² m in the nutation identity, got {residual}")
-        coeffs = sp.Poly(residual, _x).all_coeffs()
+        # the identity as a polynomial in x = sn² over the roots, β, K2 and m (cn² = 1 − x, dn² = 1 − m x): by
+        # SymPy's sparse polynomials, composing f's factored form with the ansatz, instead of substituting into
+        # and expanding expressions (most of this derivation's time)
+        R = sp.polys.rings.ring([_x, _m, k2, p, *sorted(self.cubic_in_roots.free_symbols - {u}, key=str), u],
+                                sp.QQ)[0]
+        x_sq = {sn**2: _x, cn**2: 1 - _x, dn**2: 1 - _m * _x}
+        lhs = R.from_expr(sp.Mul(*[x_sq.get(f, f) for f in sp.Mul.make_args(u_dot_sq)]))
+        cubic = R.from_expr(self.cubic_in_roots).compose(R(u), R.from_expr(ansatz.xreplace(x_sq)))
+        residual = R.zero
+        i_m, i_k2 = R.gens.index(R(_m)), R.gens.index(R(k2))
+        for monom, coeff in (lhs - cubic).terms():
+            if monom[i_m] != monom[i_k2] * (monom[i_m] > 0):  # m only in κ² m
+                raise DerivationError(f"expected m only in κ² m in the nutation identity, got {(lhs - cubic)}")
+            # κ² m → P (linear in the unknowns)
+            moved = list(monom)
+            if monom[i_m]:
+                moved[i_m], moved[i_k2] = 0, 0
+                moved[R.gens.index(R(p))] = monom[i_m]
+            residual += R({tuple(moved): coeff})
+        coeffs = sp.Poly(residual.as_expr(), _x).all_coeffs()
         sol = list(sp.linsolve([c for c in coeffs if c != 0], [k2, p]))
         if len(sol) != 1 or any(v.free_symbols & {k2, p} for v in sol[0]):
             raise DerivationError(f"expected one (κ², κ² m) for the nutation ansatz, got {sol}")
@@ -107,10 +127,33 @@ class HeavyTopExactModel(SymbolicModel):
         return {"kappa2": kappa_sq, "m": m, "m1": sp.factor(1 - m)}
 
     def _partial_fractions(self, rate_u: sp.Expr) -> dict:
-        """rate(u) along the ansatz as c0 + Σ c_i/(1 - n_i x), x = sn²; returns {"c0": .., "terms": [(c_i, n_i)]}."""
+        """rate(u) along the ansatz as c0 + Σ c_i/(1 - n_i x), x = sn²; returns {"c0": .., "terms": [(c_i, n_i)]}.
+
+        The partial fractions are taken in u, where the rate is a rational function of one variable with
+        linear poles (3.74)–(3.75) — fast — rather than in x after substituting the ansatz (a rational
+        function of x, u1, u2, a, b, …: SymPy's apart solved for undetermined coefficients there, ~0.3 s a
+        rate).  The ansatz is linear in x, so each pole maps to one: C/(p u + q) along u = u1 + (u2 − u1) x
+        is [C/(p u1 + q)] / (1 − n x) with n = −p (u2 − u1)/(p u1 + q); distinct poles in u give distinct n.
+        The result is checked to reproduce the rate along the ansatz identically."""
         u = heavy_model.u
-        c0, terms = _simple_poles(sp.together(rate_u.subs(u, u1 + (u2 - u1) * _x)), _x)
-        return {"c0": c0, "terms": terms}
+        c0, terms = sp.Integer(0), []
+        for term in sp.Add.make_args(heavy_model.partial_fractions_in_u(rate_u)):
+            num, den = sp.fraction(sp.factor(term))
+            if not den.has(u):
+                c0 += term
+                continue
+            poly = sp.Poly(den, u)
+            if poly.degree() != 1 or num.has(u):
+                raise DerivationError(f"expected simple poles in u with constant numerators, got {term}")
+            p, q = poly.all_coeffs()
+            at_u1 = p * u1 + q
+            terms.append((sp.factor(num / at_u1), sp.factor(-p * (u2 - u1) / at_u1)))
+        along = rate_u.subs(u, u1 + (u2 - u1) * _x)
+        if not _is_zero_rational(c0 + sum(c / (1 - n * _x) for c, n in terms) - along):
+            raise DerivationError("partial fractions do not reproduce the rate")
+        # in a fixed order (of n), whatever order apart lists its terms in
+        terms.sort(key=lambda cn: sp.default_sort_key(cn[1]))
+        return {"c0": sp.factor(c0), "terms": terms}
 
     @derived
     def f_taylor_state(self) -> tuple[sp.Expr, ...]:
@@ -122,10 +165,22 @@ class HeavyTopExactModel(SymbolicModel):
         leaves 1e-12 of it).  The constant term is f(u0) = sin²θ0 θ̇0² (the energy at the start).
         """
         hm = heavy_model
-        w = sp.Symbol("w", real=True)
-        shifted = sp.Poly(sp.expand(hm.model().f_u.subs(hm.u, sp.cos(hm.theta) + w)), w)
-        cfs = hm.model().constants_from_state
-        coeffs = tuple(sp.factor(trig_normal(c.subs(cfs))) for c in shifted.all_coeffs())
+        m = hm.model()
+        cfs = m.constants_from_state
+        # f's coefficients (in a, b, α, β) and u0 = cos θ0 in the state, as rational functions of cos θ, sin θ and
+        # the symbols; f(u0 + w)'s coefficients by Horner's scheme there (dividing f by u − u0 again and again
+        # leaves f(u0), f'(u0), f''(u0)/2, …): no expression is expanded, substituted into or simplified on the
+        # way (that was most of a cold start's time here); the trig normal form at the end, as trig_normal's
+        F = TrigField([*cfs.values(), sp.cos(hm.theta)])
+        remaining = [F(c.xreplace(cfs)) for c in m.f_polynomial.all_coeffs()]  # highest power first
+        u0, taylor = F(sp.cos(hm.theta)), []
+        while remaining:
+            partial = []
+            for c in remaining:
+                partial.append(c if not partial else partial[-1] * u0 + c)
+            taylor.append(partial.pop())  # the remainder of the division by u − u0
+            remaining = partial
+        coeffs = tuple(sp.factor(F.normal(c)) for c in reversed(taylor))
         if len(coeffs) != 4:
             raise DerivationError(f"expected a cubic f(u0 + w), got coefficients {coeffs}")
         return coeffs

@@ -44,7 +44,7 @@ import sympy as sp
 
 from ...core.lagrangian import LagrangianModel, from_state_symbols, vanishes
 from ...core.model import derived
-from ...core.simplify import simplify_trig, trig_normal
+from ...core.simplify import as_fraction, is_zero_rational, trig_normal
 from ...core.symbols import as_symbolic, euler_angles, state_symbol, t, to_state_symbols
 from ...errors import DerivationError
 from ...kinematics import euler as _euler
@@ -85,12 +85,29 @@ def _readable(expr: sp.Expr, collect: tuple = (I1, I3)) -> sp.Expr:
 
 def _in_u(expr: sp.Expr) -> sp.Expr:
     """``expr`` with θ = arccos u (so cos θ = u, sin θ = √(1 − u²) for 0 ≤ θ ≤ π), as one fraction."""
-    return sp.factor(sp.cancel(as_symbolic(expr).subs(theta, sp.acos(u))))
+    expr = as_symbolic(expr)
+    # θ enters the heavy top's quantities through cos θ and even powers of sin θ: those are replaced
+    # structurally (u and (1 − u²)^k) — the same rational function of u that the substitution θ = arccos u
+    # gives, without SymPy's subs (slow) or √(1 − u²) as an extra generator for cancel
+    sin_sq = lambda x: x.is_Pow and x.base == sp.sin(theta) and x.exp.is_Integer and x.exp.is_even  # noqa: E731
+    direct = expr.xreplace({sp.cos(theta): u}).replace(sin_sq, lambda x: (1 - u**2) ** (x.exp // 2))
+    if direct.has(theta):  # an odd power of sin θ, or θ elsewhere: the general route
+        return sp.factor(sp.cancel(expr.subs(theta, sp.acos(u))))
+    return sp.factor(as_fraction(direct))
+
+
+@functools.lru_cache(maxsize=8)
+def partial_fractions_in_u(rate: sp.Expr) -> sp.Expr:
+    """``rate``, a rational function of u, in partial fractions in u (SymPy's apart): shared by the rates near
+    the poles (:attr:`HeavyTopModel.rates_near_poles`) and their partial fractions along the nutation
+    (:mod:`.exact_model`), which take the same decomposition of φ̇ (3.74) and ψ̇ (3.75)."""
+    return sp.apart(sp.together(rate), u)
 
 
 def _over_one_minus_u2(expr: sp.Expr) -> sp.Expr:
-    """A rational function of u over (1 − u²), as one fraction or as (polynomial) + N(u)/(1 − u²), the shorter."""
-    expr = sp.factor(sp.cancel(sp.together(expr)))
+    """A rational function of u over (1 − u²), as one fraction or as (polynomial) + N(u)/(1 − u²), the shorter.
+
+    ``expr`` as :func:`_in_u` gives it: one fraction, factored (not factored again: that was half the time)."""
     num, den = sp.fraction(expr)
     scale = sp.cancel(den / (1 - u**2))
     if scale.has(u):
@@ -132,7 +149,9 @@ class HeavyTopModel(LagrangianModel):
     def kinetic_energy(self) -> sp.Expr:
         """T = ½ ωᵀ diag(I1, I1, I3) ω with ω from (3.58) (derived from ṘRᵀ); state symbols."""
         w = _euler.model().state_angular_velocity_body
-        return _readable(simplify_trig((w.T * sp.diag(I1, I1, I3) * w)[0] / 2))
+        # the trig normal form, tidied by _readable (which finds the perfect square (ψ̇ + φ̇ cos θ)²); a
+        # trigsimp pass between them (simplify_trig) found nothing shorter, and took ~0.3 s of a cold start
+        return _readable(trig_normal((w.T * sp.diag(I1, I1, I3) * w)[0] / 2))
 
     @derived
     def potential_energy(self) -> sp.Expr:
@@ -191,10 +210,11 @@ class HeavyTopModel(LagrangianModel):
         _ = self.spin_momentum  # establishes p_ψ = I3 ω3
         sym = self.momentum_symbols
         pf, ps = sym[self.coordinates[0]], sym[self.coordinates[2]]
-        sol = sp.solve([I1 * a - I3 * omega3, I1 * b - pf, ps - I3 * omega3], [pf, ps, omega3], dict=True)
-        if len(sol) != 1:
+        # a linear system: linsolve (sp.solve's check of the solution imports sympy.physics.units, ~0.3 s)
+        sol = list(sp.linsolve([I1 * a - I3 * omega3, I1 * b - pf, ps - I3 * omega3], [pf, ps, omega3]))
+        if len(sol) != 1 or any(v.free_symbols & {pf, ps, omega3} for v in sol[0]):
             raise DerivationError(f"expected one solution for (p_φ, p_ψ) in a, b, got {sol}")
-        return {pf: sol[0][pf], ps: sol[0][ps]}
+        return {pf: sol[0][0], ps: sol[0][1]}
 
     def _rate(self, name: str) -> sp.Expr:
         return _theta_form(self.cyclic_velocities[state_symbol(name)].subs(self.momenta_in_ab))
@@ -212,7 +232,8 @@ class HeavyTopModel(LagrangianModel):
     @derived
     def spin_energy(self) -> sp.Expr:
         """½ I3 ω3² in the conserved momenta (= p_ψ²/(2 I3)): the constant E' leaves out."""
-        e = sp.factor(simplify_trig((I3 * self.spin**2 / 2).subs(self.cyclic_velocities)))
+        # the normal form, factored (the θ, θ̇ it must be free of cancel in the normal form: exact)
+        e = sp.factor(trig_normal((I3 * self.spin**2 / 2).subs(self.cyclic_velocities)))
         if e.has(theta, theta_dot):
             raise DerivationError(f"expected ½ I3 ω3² to depend on the momenta only, got {e}")
         return e
@@ -254,7 +275,7 @@ class HeavyTopModel(LagrangianModel):
         if sp.expand(E - mass * theta_dot**2 - rest) != 0:
             raise DerivationError(f"expected E' = c θ̇² + W(θ), got {E}")
         rate_squared = (E_prime - rest) / mass  # θ̇² from (3.69)
-        M_of_beta = sp.solve(beta - 2 * M * g * l / I1, M)[0]
+        (M_of_beta,), = sp.linsolve([beta - 2 * M * g * l / I1], [M])  # (3.72) for M: linear
         f = self.u_dot_squared.subs(theta_dot**2, rate_squared).subs({E_prime: I1 * alpha / 2, M: M_of_beta})
         f = sp.cancel(_in_u(f))
         if not f.is_polynomial(u) or f.free_symbols - {u, a, b, alpha, beta}:
@@ -289,12 +310,12 @@ class HeavyTopModel(LagrangianModel):
         x, y, dm, dp = sp.symbols("x_pole y_bottom d_minus d_plus", real=True)
         out = []
         for rate in (self.precession_rate_u, self.spin_rate_u):
-            parts = sp.apart(sp.together(rate), u).xreplace({u - 1: -x, u + 1: y})
+            parts = partial_fractions_in_u(rate).xreplace({u - 1: -x, u + 1: y})
             parts = sp.expand(parts.subs({a: (dp - dm) / 2, b: (dp + dm) / 2}))
             if parts.has(u):
                 raise DerivationError(f"expected the rate in 1 − u and 1 + u only, got {parts}")
             back = parts.subs({x: 1 - u, y: 1 + u, dm: b - a, dp: b + a})
-            if sp.cancel(sp.together(back - rate)) != 0:
+            if is_zero_rational(back - rate) is not True:
                 raise DerivationError(f"expected the partial fractions to reproduce {rate}, got {parts}")
             out.append(sp.collect(parts, [x, y], sp.factor))
         return tuple(out)  # type: ignore[return-value]

@@ -103,16 +103,23 @@ def _solver_parameters(scene: "Scene") -> dict:
 
 # --- conserved quantities, derived and compiled like everything else ----------------------------
 
+def _build_invariants():
+    from . import model as hm
+
+    m = hm.model()
+    return [*hm.PARAMETERS, *hm.STATE], [m.energy, m.azimuthal_momentum, m.spin_momentum]
+
+
+#: (name, build, module) of the compiled (E, p_φ, p_ψ) (3.63)–(3.65), as :func:`_heavy_invariants` takes it
+_INVARIANTS_JOB = ("heavy_top.invariants", _build_invariants, "numpy")
+
+
 @functools.cache
 def _heavy_invariants() -> Callable[..., list]:
     from ...core import codecache
 
-    def build():
-        from . import model as hm
-
-        m = hm.model()
-        return [*hm.PARAMETERS, *hm.STATE], [m.energy, m.azimuthal_momentum, m.spin_momentum]
-    return codecache.cached_lambdify("heavy_top.invariants", build, module="numpy")[0]
+    name, build, module = _INVARIANTS_JOB
+    return codecache.cached_lambdify(name, build, module=module)[0]
 
 
 def _heavy_drifts(p: dict, energy: Any, p_phi: Any, p_psi: Any, cos_theta: Any) -> dict[str, "Drift"]:
@@ -211,6 +218,18 @@ def _estimate(top: Any, t: np.ndarray, names: list[str], scaled: "Scaled") -> fl
                float(np.ldexp(top.error_estimate(t, rates), scaled.rate)) if rates else 0.0)
 
 
+def _shared_prefix() -> None:
+    """Derive what both u(t)'s constants (f(u) (3.73) through the Routhian) and the child's jobs are derived
+    from — the Lagrangian, the conserved momenta, the cyclic velocities solved from them, a, b, α, β (3.66),
+    (3.72) of the state — once, in this process, before :func:`~mechderive.core.codecache.prefetch` forks the
+    child that goes on from there (both processes derived them before: ~40% of a cold start's CPU time,
+    doubled).  This process needs all of it next anyway (a, b, α, β first)."""
+    from . import model as hm
+
+    m = hm.model()
+    _ = m.cyclic_velocities, m.momenta_in_ab, m.constants_from_state
+
+
 def _exact(scene: "Scene", t: np.ndarray) -> Solved:
     from ..scaling import keys_text, units_of
     from .exact import exact_heavy_top
@@ -219,11 +238,14 @@ def _exact(scene: "Scene", t: np.ndarray) -> Solved:
     need = _needs(scene.quantities)
     angles = any(k not in _ANGLE_FREE for k in need)
     if angles or "phi_dot" in need or "psi_dot" in need:
-        # φ̇ and ψ̇'s partial fractions and rates will be needed: derived on a second core meanwhile (cold start)
+        # φ̇ and ψ̇'s partial fractions and rates will be needed: derived on a second core meanwhile (cold start);
+        # so are b ∓ a in the half angle (the extended setup's last constants) and the invariants (the drift
+        # check of φ, ψ or their rates), which this process would otherwise derive after u(t)'s constants
         from ...core.codecache import prefetch
         from .exact import angle_function_jobs
+        from .exact_extended import gap_jobs
 
-        prefetch(angle_function_jobs(angles=angles))
+        prefetch([*gap_jobs(), *angle_function_jobs(angles=angles), _INVARIANTS_JOB], prepare=_shared_prefix)
     try:
         # over the scene's span the constants are set up in extended precision where their measured errors
         # allow (no mpmath imported: most of a warm run's solve stage was mpmath's import and 40-digit setup)
