@@ -272,14 +272,15 @@ def test_falling_cat_with_a_huge_mass_is_solved_fast(tmp_path, capsys):
     text = ('system = "falling_cat"\n[parameters]\nhalf_mass = {m}\n[time]\nt_end = 1.0\nsamples = 201\n'
             '[output]\nquantities = ["flip_angle"]\n')
     flips = []
-    for m in ("1.0", "1e300"):
+    for m in ("1.0", "1e300"):  # the first also derives the cat's connection, if this process has not yet
         scene, out = tmp_path / f"cat{m}.toml", tmp_path / f"cat{m}.csv"
         scene.write_text(text.format(m=m))
         start = time.process_time()   # CPU time: the wall clock of a loaded CI machine says little
         with warnings.catch_warnings():
             warnings.simplefilter("error")
             status = main(["run", str(scene), "-o", str(out)])
-        assert time.process_time() - start < 3.0      # it used to run for ever
+        if m == "1e300":
+            assert time.process_time() - start < 3.0      # it used to run for ever
         assert status == 0, capsys.readouterr().err
         flips.append(np.loadtxt(out, delimiter=",", skiprows=1)[:, 1])
     # both runs meet rtol 1e-6-ish estimates of ~1e-9 rad: agreement to 1e-7 rad is a loose, safe bound
