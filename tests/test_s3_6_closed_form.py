@@ -124,16 +124,21 @@ def test_quartic_outside_its_roots_escapes_through_infinity(name, u0, direction)
     ref, _ = _ode_reference(coeffs, u0, direction, t)
     # DOP853's error grows towards the escape (measured ≲ 9e-13 of 1 + |u| at 0.97 t₊, u ~ 30)
     assert np.max(np.abs(motion.u(t) - ref) / (1 + np.abs(ref))) <= 1e-10
-    # the escape time: ∫ du/√P from u0 out to ±∞ (and twice from the root to u0 when moving inwards first), 30 digits
+    # the escape time: ∫ du/√P from u0 out to ±∞ (and twice from the root to u0 when moving inwards first)
+    assert abs(after - _escape_time(coeffs, motion.interval[0], u0, direction, np.sign(u0))) <= 1e-12 * after
+
+
+def _escape_time(coeffs, root, u0, direction, out) -> float:
+    """∫ du/√P at 30 digits from u0 out to ``out``·∞, plus twice root → u0 when the motion first moves inwards
+    (towards ``root``); from the root itself when ``direction`` is 0.  The integrand's endpoint singularity at
+    the root needs the root itself (the 40-digit one), not its double."""
     from mpmath import inf, mp, mpf, quad, sqrt
     with mp.workdps(30):
         c = [mpf(x) for x in coeffs]
-        # the integrand's endpoint singularity at the root needs the root itself (the 40-digit one), not its double
-        root, out = motion.interval[0], np.sign(u0)
         start = root if direction == 0 else mpf(u0)
         f = lambda x: 1 / sqrt(abs(mp.polyval(c, x)))  # noqa: E731
         back = 2 * abs(quad(f, [root, start])) if direction * out < 0 else 0
-        assert abs(after - float(abs(quad(f, [start, out * inf])) + back)) <= 1e-12 * after
+        return float(abs(quad(f, [start, out * inf])) + back)
 
 
 def test_escape_through_infinity_agrees_with_the_cubic_of_u_equal_x_squared():
@@ -170,14 +175,7 @@ def test_quartic_with_a_complex_pair_escapes_outside_its_real_roots(name, lead, 
     # DOP853's error near the escape (measured ≲ 1e-12 of 1 + |u| at 0.97 t₊, u ~ 30 to 90)
     assert np.max(np.abs(motion.u(t) - ref) / (1 + np.abs(ref))) <= 1e-10
     # the escape time against ∫ du/√P from the start out to ±∞ (twice to the root and back when moving inwards)
-    from mpmath import inf, mp, mpf, quad, sqrt
-    with mp.workdps(30):
-        c = [mpf(x) for x in coeffs]
-        root, out = motion.interval[0], np.sign(u0 - 0.5)
-        start = root if direction == 0 else mpf(u0)
-        f = lambda x: 1 / sqrt(abs(mp.polyval(c, x)))  # noqa: E731
-        back = 2 * abs(quad(f, [root, start])) if direction * out < 0 else 0
-        assert abs(after - float(abs(quad(f, [start, out * inf])) + back)) <= 1e-12 * after
+    assert abs(after - _escape_time(coeffs, motion.interval[0], u0, direction, np.sign(u0 - 0.5))) <= 1e-12 * after
     # u̇² = P(u) along it, to rounding (u̇ from cn's derivative: an independent check of κ)
     u, u_dot = motion.u(t), motion.u_dot(t)
     assert np.max(np.abs(u_dot**2 - np.polyval(coeffs, u)) / (1 + np.abs(np.polyval(coeffs, u)))) <= 1e-13
