@@ -579,7 +579,10 @@ class LagrangianSystem(System):
         """closed_form_u, _m, _kappa, _t and closed_form_<c> (:func:`.closed.solution_formulas`): the solution as
         formulas, built on request (a system without a reduction lists them and says why when asked)."""
         names = ["u", "m", "kappa", "t", *self.equations.cyclic]
-        meanings = {"u": "u(χ) along the motion between two roots of P (χ the amplitude)",
+        # the formulas are the system's, not a start's: say which motion they describe
+        meanings = {"u": "u(χ) along the motion between two real roots of P (χ the amplitude); a start with no "
+                         "turning point, beside a complex pair or escaping to ∞ takes another form, which `run --json` "
+                         "reports under details.closed_form",
                     "m": "the Jacobi parameter m, the roots' cross-ratio", "kappa": "the rate κ of the Jacobi argument",
                     "t": "t − t₀ = (F(χ|m) − F(χ₀|m))/κ"}
 
