@@ -580,6 +580,18 @@ def _elliptic_motion(coefficients: Sequence, u0: Any, direction: int, dps: int) 
         return EllipticMotion(tuple(c), (a, b), (a, b, cc, d), mob, m, m1, kappa, v_start, K, 2 * K / kappa, degree)
 
 
+def _outside(u0: Any, low: Any, high: Any, where: str) -> tuple:
+    """(the root on u0's side, the other) for a start outside the roots ``low`` < ``high`` of P, where P > 0 (a start
+    on a root, to 2⁻⁴⁰ relative, counts as outside); between them P < 0 and there is no motion: NotElliptic."""
+    mp = _mp()
+    slack = mp.mpf(2) ** -40 * (1 + abs(u0))
+    if u0 >= high - slack:
+        return high, low
+    if u0 <= low + slack:
+        return low, high
+    raise NotElliptic(f"expected u̇² = P(u0) ≥ 0, got P(u0) < 0 at u0 = {mp.nstr(u0, 10)} {where}")
+
+
 def _hyperbolic(c: list, roots: list, u0: Any, direction: int) -> EllipticMotion:
     """P = c0 (u − r1)(u − r2) with c0 > 0: u runs from its turning point (r2 for u ≥ r2, r1 for u ≤ r1) to ∞,
     u = M(tanh²(κ t + v_s)) = r + (r − r') sinh²(κ t + v_s) with κ² = c0/4: the m = 1 case of the Möbius form,
@@ -588,14 +600,7 @@ def _hyperbolic(c: list, roots: list, u0: Any, direction: int) -> EllipticMotion
     if len(roots) < 2:
         raise NotElliptic("expected real roots of an unbounded quadratic P, got none: u passes through every "
                           "value (a motion with no turning point), not covered")
-    r1, r2 = roots[0], roots[-1]
-    slack = mp.mpf(2) ** -40 * (1 + abs(u0))
-    if u0 >= r2 - slack:
-        a, d = r2, r1
-    elif u0 <= r1 + slack:
-        a, d = r1, r2
-    else:
-        raise NotElliptic(f"expected u̇² = P(u0) ≥ 0, got P(u0) < 0 at u0 = {mp.nstr(u0, 10)} between the roots")
+    a, d = _outside(u0, roots[0], roots[-1], "between the roots")
     mob = _mobius(a, mp.inf, d)
     kappa = mp.sqrt(c[0] / 4)
     v_start = _start(mob, u0, direction, mp.mpf(1), mp.inf)

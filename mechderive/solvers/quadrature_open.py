@@ -52,7 +52,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from .quadrature_motion import DPS, EllipticMotionCn, NotElliptic, _mp, _split_mp
+from .quadrature_motion import DPS, EllipticMotionCn, NotElliptic, _mp, _outside, _split_mp
 
 __all__ = ["ElementaryMotion", "EllipticMotionCubicPair", "EllipticMotionCnEscape", "ElementaryRate", "open_motion",
            "elementary_rate_integral", "complex_pair_quartic_outside", "EllipticMotionTan", "two_pair_quartic"]
@@ -238,14 +238,7 @@ def complex_pair_quartic_outside(c: list, roots: list, u0: Any, direction: int) 
     to f (B&F 260.00).  m and κ² are checked against P at two values of cn (the ratio κ² = P/(du/dv)² must be
     constant), and u(t) in the tests against DOP853."""
     mp = _mp()
-    a, b = roots
-    slack = mp.mpf(2) ** -40 * (1 + abs(u0))
-    if u0 >= b - slack:
-        e, f = b, a
-    elif u0 <= a + slack:
-        e, f = a, b
-    else:
-        raise NotElliptic(f"expected u̇² = P(u0) ≥ 0, got u0 = {mp.nstr(u0, 10)} between the real roots, where P < 0")
+    e, f = _outside(u0, *roots, "between the real roots")
     pair = [z for z in mp.polyroots(c, maxsteps=400, extraprec=6 * mp.mp.dps) if abs(mp.im(z)) > 0]
     alpha, beta = mp.re(pair[0]), abs(mp.im(pair[0]))
     E, F = mp.sqrt((e - alpha) ** 2 + beta**2), mp.sqrt((f - alpha) ** 2 + beta**2)
@@ -268,13 +261,12 @@ def complex_pair_quartic_outside(c: list, roots: list, u0: Any, direction: int) 
                           "double root, not covered")
     kappa = mp.sqrt(k2)
     K = mp.ellipk(m)
-    # cn0 from the inverse Möbius map; acos as 2 asin √((1 − cn0)/2), which keeps its digits at the root (cn0 → 1)
-    cn0 = min(max((A - C * u0) / (D * u0 - B), mp.mpf(-1)), mp.mpf(1))
+    # cn0 from the inverse Möbius map, taken as 1 − cn0 and acos as 2 asin √((1 − cn0)/2), which keep their digits
+    # at the root (cn0 → 1)
     one_minus = (C + D) * (u0 - e) / (D * u0 - B)  # 1 − cn0 without cancellation: ((C + D)u0 − (A + B))/(D u0 − B)
     v0 = mp.ellipf(2 * mp.asin(mp.sqrt(max(min(one_minus / 2, mp.mpf(1)), mp.mpf(0)))), m)
     rising = -(B * C - A * D) > 0  # du/dv = −det sn dn/(C + D cn)² on (0, 2K)
     v_start = mp.mpf(0) if direction == 0 else (v0 if (direction > 0) == rising else -v0)
-    del cn0
     return EllipticMotionCnEscape(tuple(c), (e, f), (e, f, mp.mpf("nan"), mp.mpf("nan")), (A, B, C, D), m, m1, kappa,
                                   v_start, K, mp.inf, 4)
 
