@@ -457,6 +457,29 @@ def test_inverse_square_repulsion_under_u_equal_q_squared():
     assert abs(result.report["summary"]["x_min"] - np.sqrt(1.0 / E)) <= 4e-16
 
 
+@pytest.mark.parametrize("x0, v0", [(1.0, -1.0), (-2.0, 2.0), (1.0, 1.0), (-0.5, -0.5)],
+                         ids=["towards from the right", "towards from the left", "away to +∞", "away to −∞"])
+def test_inverted_oscillator_on_its_separatrix(x0, v0):
+    """L = ẋ²/2 + kx²/2 with E = 0 (ẋ0 = ±x0, k = 1): P = (u − 0)² has a double root, and x = x0 e^{±t} by hand,
+    towards the unstable equilibrium x = 0 (never reached: the bound on x0's side, the other side unbounded) or
+    away from it.  Towards it to t = 800, where e^{t} itself overflows the doubles and x underflows."""
+    t_end = 800.0 if v0 * x0 < 0 else 20.0
+    result = run_scene(_scene(["x"], "x_dot**2/2 + k*x**2/2", dict(k=1.0), dict(x=x0, x_dot=v0), t_end=t_end,
+                              samples=401, summary=["x_min", "x_max", "period"]))
+    assert result.report["method"] == "exact", result.report.get("note")
+    t = np.linspace(0.0, t_end, 401)
+    s = np.sign(v0 * x0)
+    # x0 e^{st}: e^{κt} with κ = 1 exactly, rounded once as here (an ulp of each value, plus x0's)
+    exact = x0 * np.exp(s * t)
+    assert np.all(np.isfinite(result.columns["x"])) and np.all(np.isfinite(result.columns["x_dot"]))
+    assert np.max(np.abs(result.columns["x"] - exact) / np.maximum(np.abs(exact), 1e-300)) <= 4e-15
+    assert np.max(np.abs(result.columns["x_dot"] - s * exact) / np.maximum(np.abs(exact), 1e-300)) <= 4e-15
+    summary, why = result.report["summary"], result.report["summary_error"]
+    bounded, free = ("x_min", "x_max") if x0 > 0 else ("x_max", "x_min")
+    assert summary[bounded] == 0.0 and summary[free] is None and "equilibrium" in why[free]
+    assert summary["period"] is None and "no period" in why["period"]
+
+
 def test_a_fast_polynomial_motion_passes_its_own_check():
     """The polynomial form has no time scale of its own: the derivative check resolves the outputs' span (an
     inverse-square repulsion with k = 1e6 turns within 1 ms; a step of 1e-4 s failed the check, measured)."""

@@ -56,8 +56,9 @@ beyond them the formulas continue through ∞ (u̇² = P(u) still holds) but des
 refuses them.
 
 Not covered (the caller integrates instead; :class:`NotElliptic` says why): a complex pair so near the real
-axis on the motion that 1 − m < 1e-15 (a nearly double root the motion passes slowly), a quadratic with a
-double root or a complex pair too near the real axis to resolve at 40 digits, an unstable equilibrium (a start
+axis on the motion that 1 − m < 1e-15 (a nearly double root the motion passes slowly), a quadratic whose two
+roots are too near each other or the real axis to resolve at 40 digits (one double to the working precision is
+solved: :func:`~mechderive.solvers.quadrature_open.exponential_double_root`), an unstable equilibrium (a start
 on a double root with P'' > 0), the cyclic rates at m = 1, on the cn and tan forms and with poles on the
 elementary forms, and rates with complex poles, poles on the motion, or a polynomial part of degree > 1 in w.
 """
@@ -478,6 +479,11 @@ def _elliptic_motion(coefficients: Sequence, u0: Any, direction: int, dps: int) 
                 raise NotElliptic("expected simple roots of P, got a double root at u = "
                                   f"{mp.nstr(double, 10)} that the motion starts on: an unstable equilibrium "
                                   "(the separatrix's end), not periodic")
+            if degree == 2 and c[0] > 0 and abs(x - y) <= mp.mpf(10) ** (-DPS + 5) * (1 + abs(double)):
+                # P = c2 (u − r)² (double to the working precision, as a separatrix's below): u − r ∝ e^{±κt}
+                from .quadrature_open import exponential_double_root
+
+                return exponential_double_root(c, double, u0, direction)
             if len(close) > 1 or degree == 2:
                 raise NotElliptic("expected at most one double root of P, away from the start, got "
                                   f"{len(close)} (a degenerate P)")

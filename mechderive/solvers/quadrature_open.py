@@ -41,7 +41,10 @@ A cyclic coordinate's rate ċ = R(u) that is a polynomial in u integrates in clo
 E = e^{κt}, it is Σ_j C_j E^j (j = −deg R … deg R), and ∫₀^t = C_0 t + Σ_{j≠0} C_j (e^{jκt} − 1)/(jκ) — a
 projectile's horizontal coordinate, ẏ = p_y − w x with a magnetic-like coupling.
 
-Not covered here: a quadratic with a double real root (u − α ∝ e^{±κt}); rates with poles in u (a rational R,
+* **a quadratic with a double root r**, P = c2 (u − r)², c2 > 0, from u0 ≠ r: u = r + (u0 − r) e^{±κt}
+  (:func:`exponential_double_root`), towards r or away from it, never reaching it.
+
+Not covered here: rates with poles in u (a rational R,
 which the motion may pass) on the elementary forms, and any rate on the cn and tan forms.
 """
 
@@ -54,7 +57,7 @@ import numpy as np
 
 from .quadrature_motion import DPS, EllipticMotionCn, NotElliptic, _mp, _outside, _split_mp
 
-__all__ = ["ElementaryMotion", "EllipticMotionCubicPair", "EllipticMotionCnEscape", "ElementaryRate", "open_motion",
+__all__ = ["ElementaryMotion", "exponential_double_root", "EllipticMotionCubicPair", "EllipticMotionCnEscape", "ElementaryRate", "open_motion",
            "elementary_rate_integral", "complex_pair_quartic_outside", "EllipticMotionTan", "two_pair_quartic"]
 
 
@@ -78,10 +81,11 @@ class ElementaryMotion:
     kappa: Any
     steady: bool = False
     _f: dict = field(default_factory=dict, repr=False)
+    #: u tends to a double root of P (as t → ∞ or −∞) and never reaches it: u − r ∝ e^{±κt}
+    asymptotic: bool = False
 
     #: no Jacobi functions: the closed form's estimate and folds take the elementary path
     elementary = True
-    asymptotic = False
     escape_times = None
     m = None
 
@@ -123,7 +127,12 @@ class ElementaryMotion:
         if self.form == "polynomial":
             return c[0] + t * (c[1] + c[2] * t)
         ep, em = self._exp(t)
-        return c[0] + (c[1] * ep + c[2] * em)
+        return c[0] + (self._times(c[1], ep) + self._times(c[2], em))
+
+    @staticmethod
+    def _times(p: float, e: np.ndarray) -> np.ndarray:
+        """p e^{±κt}; 0 where p = 0 (the double root's one-sided form), also where e^{κt} overflows."""
+        return p * e if p != 0.0 else np.zeros_like(e)
 
     def u_dot(self, t: Any, jac: tuple | None = None) -> np.ndarray:
         t = np.asarray(t, dtype=float) if jac is None else jac[0]
@@ -131,7 +140,7 @@ class ElementaryMotion:
         if self.form == "polynomial":
             return c[1] + 2.0 * c[2] * t
         ep, em = self._exp(t)
-        return self._f["k"][0] * (c[1] * ep - c[2] * em)
+        return self._f["k"][0] * (self._times(c[1], ep) - self._times(c[2], em))
 
     def minus(self, point: Any, t: Any, jac: tuple | None = None) -> np.ndarray:
         """u(t) − ``point`` (the rates offered here have no poles, near which this would need more care)."""
@@ -434,7 +443,7 @@ def _exponential(c: list, u0: Any, direction: int) -> ElementaryMotion:
     alpha = -c1 / (2 * c2)
     beta_sq = c0 / c2 - alpha**2
     # β² from c0/c2 − α² cancels to ~10^-DPS of α²: a pair nearer the real axis than that is not resolved (it may be
-    # a double root, u − α ∝ e^{±κt}, another motion)
+    # a double root, u − α ∝ e^{±κt}: exponential_double_root, when the 40-digit roots are double)
     if not beta_sq > mp.mpf(10) ** (-DPS + 10) * (alpha**2 + abs(c0 / c2)):
         raise NotElliptic(f"expected a complex pair of roots resolved at {DPS} digits, got α ± iβ with β² = "
                           f"{mp.nstr(beta_sq, 3)} beside α = {mp.nstr(alpha, 10)}: a nearly double root, not covered")
@@ -451,6 +460,26 @@ def _exponential(c: list, u0: Any, direction: int) -> ElementaryMotion:
         big = (x0 - half) / 2
         p_plus, p_minus = -beta_sq / (4 * big), big
     return ElementaryMotion(tuple(c), 2, "exponential", (alpha, p_plus, p_minus), (-mp.inf, mp.inf), kappa)
+
+
+def exponential_double_root(c: list, r: Any, u0: Any, direction: int) -> ElementaryMotion:
+    """P = c2 (u − r)², c2 > 0, u0 ≠ r: ü = c2 (u − r), and u̇ = ±κ (u − r) with κ = √c2 at every time, so
+
+        u = r + (u0 − r) e^{sκt},   s = sign(u̇0 (u0 − r)),
+
+    the limit of the exponential form α + p₊e^{κt} + p₋e^{−κt} as β → 0 with one p zero: the motion along the
+    separatrix of an inverted oscillator, towards the unstable equilibrium r (s = −1: reached as t → ∞) or away
+    from it (s = +1: left as t → −∞).  r is the motion's bound on u0's side, approached and never reached; the
+    other side is unbounded.  ``r`` is the double root (P's pair merged at the working precision)."""
+    mp = _mp()
+    x0 = u0 - r
+    if direction == 0 or x0 == 0:
+        raise NotElliptic("expected a start off the double root of P = c2 (u − r)² with u̇0 ≠ 0, got u̇0 = 0")
+    kappa = mp.sqrt(c[0])
+    away = (direction > 0) == (x0 > 0)
+    p_plus, p_minus = (x0, mp.mpf(0)) if away else (mp.mpf(0), x0)
+    return ElementaryMotion(tuple(c), 2, "exponential", (r, p_plus, p_minus), (r, mp.inf if x0 > 0 else -mp.inf),
+                            kappa, asymptotic=True)
 
 
 def _cubic_complex_pair(c: list, r: Any, u0: Any, direction: int) -> EllipticMotionCubicPair:

@@ -178,6 +178,10 @@ class ClosedMotion:
             self.kind = "unbounded: reaches infinity in finite time"
         elif np.isfinite(float(b)):
             self.kind = "oscillation between turning points"
+        elif elementary and motion.asymptotic:
+            towards = float(motion.constants[1]) == 0.0  # u − r ∝ e^{−κt}
+            self.kind = ("unbounded: from infinity towards an unstable equilibrium, never reached" if towards else
+                         "unbounded: away from an unstable equilibrium, to infinity")
         elif elementary:
             self.kind = {"polynomial": "unbounded: uniformly accelerated" if motion.degree == 1 else
                          "unbounded: uniform motion", "exponential": "unbounded: no turning point"}[motion.form]
@@ -359,7 +363,8 @@ class ClosedMotion:
             side = u_side * np.sign(float(self.shape.dg(np.array(q_turn))))
         bounded = "_min" if side > 0 else "_max"
         if not name.endswith(bounded):
-            raise OutOfReach(f"{name}: q is not bounded on this side ({self.kind}, from its turning point "
+            bound = "the equilibrium" if self.motion.asymptotic else "its turning point"  # approached, not reached
+            raise OutOfReach(f"{name}: q is not bounded on this side ({self.kind}, from {bound} "
                              f"{self.remaining} = {q_turn:.12g})")
         return q_turn
 
