@@ -108,9 +108,19 @@ def _alarm(signum, frame) -> None:
 
 def _settle() -> None:
     """Let no SIGALRM outlive our handler: one held back by the mask is taken, one already received is
-    handled here (a Python call handles pending signals), while the handler is still ours."""
-    if hasattr(signal, "sigpending") and signal.SIGALRM in signal.sigpending():
-        signal.sigwait({signal.SIGALRM})
+    handled here (a Python call handles pending signals), while the handler is still ours.
+
+    Never a blocking wait: ``sigpending`` reports signals pending for the *process* too, and another
+    thread that does not block SIGALRM (pytest-xdist's and Dask's threads, a user's) may take such
+    a signal between the look and a ``sigwait``, which then waits forever (seen: a test worker hung).
+    ``sigtimedwait`` with a zero timeout takes it if it is still there and returns at once if not;
+    where it is missing (macOS), the signal is unblocked instead and our handler, told by
+    :func:`_bookkeeping` not to raise, takes it."""
+    if hasattr(signal, "sigtimedwait"):
+        signal.sigtimedwait({signal.SIGALRM}, 0)
+    elif hasattr(signal, "pthread_sigmask"):
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGALRM})
+        signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGALRM})
 
 
 def _unraisable(unraisable) -> None:

@@ -222,6 +222,29 @@ def test_nested_scopes_and_restoration():
     assert run_until(lambda: _spin(1), time.monotonic() - 1, unbudgeted_ok=True) == (False, None)  # already late
 
 
+def test_an_alarm_another_thread_took_is_not_waited_for(monkeypatch):
+    """The outermost scope's end takes a SIGALRM still pending.  One that ``sigpending`` showed may be
+    taken by another thread before it is waited for (xdist's and Dask's threads do not block it): a
+    blocking ``sigwait`` then hung a test worker for good.  Here the signal is seen and gone; a thread
+    sends one after 2 s so that a blocking wait ends, and fails the time check, instead of hanging."""
+    from mechderive.formulas import budget
+
+    previous = signal.signal(signal.SIGALRM, lambda *_: None)
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGALRM})
+    rescue = threading.Timer(2.0, signal.pthread_kill, (threading.main_thread().ident, signal.SIGALRM))
+    try:
+        monkeypatch.setattr(signal, "sigpending", lambda: {signal.SIGALRM})
+        rescue.start()
+        start = time.monotonic()
+        budget._settle()
+        assert time.monotonic() - start < 1
+    finally:
+        rescue.cancel()
+        rescue.join()
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+        signal.signal(signal.SIGALRM, previous)
+
+
 def test_someone_elses_timer_is_left_alone():
     fired = []
     previous = signal.signal(signal.SIGALRM, lambda *_: fired.append(1))
