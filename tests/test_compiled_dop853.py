@@ -110,6 +110,50 @@ def test_step_limit_is_an_integration_error():
         _blow_up().solve(np.array([0.0, 0.9]), np.array([1.0]), [], 1e-12, 1e-14, max_steps=5)
 
 
+# --- a batch of runs: each the single run, bit for bit, with its own status ------------------------------
+
+def test_a_batch_takes_each_points_own_steps_bit_for_bit():
+    from mechderive.systems.heavy_top.integrate import _compiled_dop853
+
+    ode = _compiled_dop853()
+    rng = np.random.default_rng(15)
+    m = 6
+    t = np.linspace(0.0, 3.0, 61)
+    q = rng.normal(size=(m, 4))
+    y0 = np.hstack([rng.normal(size=(m, 3)) * [1, 1, 10], q / np.linalg.norm(q, axis=1, keepdims=True)])
+    y0[2, 3:] = [1.0, 0.0, 0.0, 0.0]  # θ = 0 exactly: tracked from z_B = 0
+    par = np.array([[HEAVY["I1"] * (1 + 0.5 * rng.random()), HEAVY["I3"], HEAVY["M"], HEAVY["g"], HEAVY["l"]]
+                    for _ in range(m)])[:, :ode.n_par]
+    rtol = 10.0 ** rng.uniform(-12, -6, m)           # each point its own tolerances, as a rerun asks
+    args0 = rng.uniform(-3, 3, (m, 2))
+    # small chunks: every point stops and resumes in several calls, which must not change a bit
+    batch = ode.solve_batch(t, y0, par, rtol, rtol * 1e-3, track=(3, args0), chunk_evaluations=500)
+    assert list(batch.status) == [0] * m and batch.errors == [None] * m
+    for i in range(m):
+        y, info = ode.solve(t, y0[i], par[i], rtol[i], rtol[i] * 1e-3, track=(3, args0[i]))
+        assert y.tobytes() == batch.y[i].tobytes()
+        assert info["args"].tobytes() == batch.args[i].tobytes()
+        assert (info["nfev"], info["steps"], info["rejected"]) == (batch.nfev[i], batch.steps[i], batch.rejected[i])
+        assert np.array_equal(info["near"], batch.near[i]) and np.array_equal(info["closest"], batch.closest[i])
+
+
+def test_a_point_that_fails_ends_alone_with_the_single_runs_error():
+    ode = _blow_up()
+    t = np.array([0.0, 0.5, 2.0])
+    y0 = np.array([[0.1], [1.0], [np.nan], [0.2], [0.6]])   # 1/(1/y0 - t): 1.0 and 0.6 blow up before t = 2
+    batch = ode.solve_batch(t, y0, np.zeros((5, 0)), 1e-12, 1e-14, max_steps=10_000)
+    done = [i for i in range(5) if batch.errors[i] is None]
+    assert done == [0, 3]
+    for i in done:  # y = y0/(1 - y0 t)
+        assert batch.y[i, -1, 0] == pytest.approx(y0[i, 0] / (1 - 2 * y0[i, 0]), rel=1e-10)
+    for i in (1, 2, 4):
+        with pytest.raises(IntegrationError) as single:
+            ode.solve(t, y0[i], [], 1e-12, 1e-14, max_steps=10_000)
+        assert str(batch.errors[i]) == str(single.value) and batch.status[i] != 0
+    steps = ode.solve_batch(t, y0[[0, 4]], np.zeros((2, 0)), 1e-12, 1e-14, max_steps=5)
+    assert "within max_steps = 5 steps" in str(steps.errors[1])
+
+
 def test_backend_names_are_checked():
     with pytest.raises(InvalidInputError, match="backend one of 'auto', 'c', 'scipy'"):
         integrate_heavy_top(HEAVY, LAUNCH, [0.0, 1.0], backend="fortran")

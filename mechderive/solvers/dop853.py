@@ -31,7 +31,8 @@ import numpy as np
 from ..errors import IntegrationError, InvalidInputError, MechDeriveError
 from .limits import MAX_STEPS, check_max_steps, nonfinite_start, nonfinite_state, too_many_steps
 
-__all__ = ["SCIPY_MIN_RTOL", "BACKENDS", "Dop853Run", "run_dop853", "check_backend", "reference_tolerance"]
+__all__ = ["SCIPY_MIN_RTOL", "BACKENDS", "Dop853Run", "run_dop853", "check_backend", "reference_tolerance",
+           "reference_run"]
 
 #: solve_ivp raises rtol below 100·ε to this value.
 SCIPY_MIN_RTOL = 2.3e-14
@@ -186,6 +187,13 @@ def run_dop853(fun: Callable[[float, np.ndarray], Any] | None, t: np.ndarray, y0
     wall = time.perf_counter() - start
     if not reference:
         return sol, wall, None, "not requested", 1.0
+    rt_ref, at_ref, factor, how = reference_run(label, rtol, atol)
+    return sol, wall, solve(rt_ref, at_ref), how, factor
+
+
+def reference_run(label: str, rtol: float, atol: float) -> tuple[float, float, float, str]:
+    """(rtol, atol of the reference run, the factor of :func:`reference_tolerance`, how the run is made):
+    one definition for a single run (:func:`run_dop853`) and a batch (:mod:`.batch`)."""
     rt_ref, factor = reference_tolerance(rtol)
     at_ref = atol * rt_ref / rtol
     how = f"{label} at rtol={rt_ref:.2g}, atol={at_ref:.2g}"
@@ -193,4 +201,4 @@ def run_dop853(fun: Callable[[float, np.ndarray], Any] | None, t: np.ndarray, y0
         how += " (looser: no tighter run is possible, so the distance is an upper bound)"
     elif factor > 1.0:
         how += f", distance × {factor:.3g} = 1/(1 - √(tolerance ratio))"
-    return sol, wall, solve(rt_ref, at_ref), how, factor
+    return rt_ref, at_ref, factor, how

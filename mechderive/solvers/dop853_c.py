@@ -27,6 +27,12 @@ size collapses, and after ``max_steps`` steps (:data:`~mechderive.solvers.limits
 state lives in a buffer owned by Python, so the run goes in calls of bounded wall time
 (:data:`CHUNK_SECONDS`) between which Python sees Ctrl-C; where a call stops does not change a bit
 of the result.
+
+A batch of runs (a sweep's points: :meth:`CompiledDOP853.solve_batch`) goes through one more C
+function, ``dop853_solve_batch``, which hands each point's own Run buffer to the same
+``dop853_solve``: every point takes the steps it takes alone (bit for bit), ends with its own status
+(one point that blows up does not stop the others), and the batch too runs in calls of bounded wall
+time, the evaluations of all its points counted against one budget.
 """
 
 from __future__ import annotations
@@ -43,8 +49,8 @@ from ..core import cbuild
 from .half_angles import DECADE_THRESHOLDS, DECADES, MAX_REFINEMENTS
 from .limits import check_max_steps, nonfinite_start, nonfinite_state, too_many_steps
 
-__all__ = ["CompiledDOP853", "compiled_dop853", "dop853_c_source", "unavailable_error", "MIN_RTOL", "CHUNK_SECONDS",
-           "FIRST_CHUNK"]
+__all__ = ["CompiledDOP853", "BatchRun", "DONE", "compiled_dop853", "dop853_c_source", "unavailable_error", "MIN_RTOL",
+           "CHUNK_SECONDS", "FIRST_CHUNK"]
 
 #: The smallest rtol accepted, as in SciPy (100 ε): below it the controller chases rounding.
 MIN_RTOL = 100 * np.finfo(float).eps
@@ -439,6 +445,36 @@ report:
     }
     return status;
 }
+
+/* ---- a batch: independent runs, each exactly the run dop853_solve makes alone ---- */
+/* Point i has its own Run (runs + i run_words, zeroed: not started), parameters par + i npar, initial
+   state, tolerances rtol[i], atol[i], outputs (y_out + i n_out NDIM; with qoff >= 0 arg_out + 2 i n_out
+   and closest + i (2 + 2 NDEC)), stats + 3 i, where + 2 i and status[i].  Only points whose status is
+   ST_CHUNK are advanced (the caller sets it for the points to run); each is handed to dop853_solve with
+   the evaluations left of `budget`, so its steps are those of a run of its own (where a call stops does
+   not change them), and its status is its own: one point that blows up or stalls ends there, the others
+   go on.  The call returns once `budget` evaluations in all have been made (after a whole step) or no
+   point is left; the result is the number of points still ST_CHUNK. */
+long dop853_solve_batch(long n_pts, double *runs, long run_words, int npar, const double *par,
+                        const double *y0, int n_out, const double *t_out, double *y_out, const double *rtol,
+                        const double *atol, long max_steps, long budget, long *stats, double *where, int qoff,
+                        double *arg_out, double *closest, int *status)
+{
+    long left = budget, pending = 0;
+    for (long i = 0; i < n_pts; i++) {
+        if (status[i] != ST_CHUNK) continue;
+        if (left <= 0) { pending++; continue; }
+        Run *run = (Run *)(runs + i * run_words);
+        long before = run->started ? run->nfev : 0;
+        status[i] = dop853_solve(run, par + i * npar, y0 + i * NDIM, n_out, t_out, y_out + i * (long)n_out * NDIM,
+                                 rtol[i], atol[i], max_steps, left, stats + 3 * i, where + 2 * i, qoff,
+                                 qoff >= 0 ? arg_out + 2 * i * (long)n_out : arg_out,
+                                 qoff >= 0 ? closest + i * (2 + 2 * NDEC) : closest);
+        left -= run->nfev - before;
+        if (status[i] == ST_CHUNK) pending++;
+    }
+    return pending;
+}
 """
 
 
@@ -480,6 +516,37 @@ def dop853_c_source(exprs: Any, state: Sequence[Any], params: Sequence[Any], *, 
     return "\n".join(parts)
 
 
+#: :attr:`BatchRun.status` of a run that reached the last output time
+DONE = _DONE
+
+
+@dataclass(frozen=True)
+class BatchRun:
+    """M runs of :meth:`CompiledDOP853.solve_batch`: ``y`` (M, N, n) at the output times; per run the
+    evaluations, accepted and rejected steps, ``status`` (:data:`DONE`, else the stepper's reason) and
+    ``errors`` (None, or the :class:`~mechderive.errors.IntegrationError` :meth:`CompiledDOP853.solve`
+    raises for it: its ``y`` rows past where it stopped are not defined); ``wall``: seconds of the whole
+    batch; with tracking ``args`` (M, N, 2), ``closest`` (M, 2) and ``near`` (M, 2, DECADES)."""
+
+    y: np.ndarray
+    nfev: np.ndarray
+    steps: np.ndarray
+    rejected: np.ndarray
+    status: np.ndarray
+    errors: list
+    wall: float
+    args: np.ndarray | None = None
+    closest: np.ndarray | None = None
+    near: np.ndarray | None = None
+
+    def info(self, i: int) -> dict:
+        """Run ``i``'s statistics as :meth:`CompiledDOP853.solve` returns them."""
+        out = dict(nfev=int(self.nfev[i]), steps=int(self.steps[i]), rejected=int(self.rejected[i]))
+        if self.args is not None:
+            out.update(args=self.args[i], closest=self.closest[i], near=self.near[i])
+        return out
+
+
 @dataclass(frozen=True)
 class CompiledDOP853:
     """A compiled DOP853 stepper for one derived system with ``n`` state and ``n_par`` parameter values."""
@@ -489,6 +556,7 @@ class CompiledDOP853:
     n_par: int
     _solve: Any
     _run_words: int = 0
+    _solve_batch: Any = None
 
     def solve(self, t_eval: np.ndarray, y0: np.ndarray, params: Sequence[float], rtol: float, atol: float, *,
               max_steps: int | None = None, track: tuple[int, Sequence[float]] | None = None,
@@ -547,6 +615,73 @@ class CompiledDOP853:
             info.update(args=args, closest=closest[:2], near=closest[2:].reshape(2, DECADES).astype(np.int64))
         return out, info
 
+    def solve_batch(self, t_eval: np.ndarray, y0: np.ndarray, params: np.ndarray, rtol: Any, atol: Any, *,
+                    max_steps: int | None = None, track: tuple[int, np.ndarray] | None = None,
+                    chunk_evaluations: int | None = None) -> "BatchRun":
+        """M runs at once: y0 (M, n), ``params`` (M, n_par), ``rtol`` and ``atol`` scalars or (M,), all
+        with the output times ``t_eval``; ``track = (qoff, args0 (M, 2))`` as in :meth:`solve`.
+
+        Each run takes exactly the steps :meth:`solve` takes from the same point (the same C function,
+        handed the run's own buffer: its outputs equal :meth:`solve`'s bit for bit), with its own status:
+        a run that does not reach ``t_eval[-1]`` (a state or right-hand side not finite, the step size
+        collapsing, ``max_steps``) has its :class:`~mechderive.errors.IntegrationError` in
+        :attr:`BatchRun.errors` — the one :meth:`solve` raises — and the others go on.  The batch runs in
+        calls of bounded wall time (:data:`CHUNK_SECONDS`, the evaluations of all its runs counted), so
+        Ctrl-C stops it as it stops a single run.
+        """
+        if self._solve_batch is None:  # pragma: no cover - every library built by this module has it
+            raise IntegrationError(f"expected the compiled DOP853 of {self.name!r} to have its batch entry point, "
+                                   "got a library without it")
+        max_steps = min(check_max_steps(max_steps), _LONG_MAX // 2)
+        t = np.ascontiguousarray(t_eval, dtype=float)
+        y0 = np.ascontiguousarray(y0, dtype=float)
+        m = y0.shape[0] if y0.ndim == 2 else -1
+        par = np.ascontiguousarray(np.reshape(params, (m, self.n_par)) if m >= 0 else params, dtype=float)
+        if y0.shape != (m, self.n) or par.shape != (m, self.n_par):
+            raise IntegrationError(f"expected y0 of shape (M, {self.n}) and parameters of shape (M, {self.n_par}), "
+                                   f"got {y0.shape} and {np.shape(params)}")
+        # each run's tolerance as solve() takes it: rtol raised to MIN_RTOL
+        rt = np.ascontiguousarray(np.maximum(np.broadcast_to(np.asarray(rtol, dtype=float), (m,)), MIN_RTOL))
+        at = np.ascontiguousarray(np.broadcast_to(np.asarray(atol, dtype=float), (m,)))
+        if track is not None and not 0 <= track[0] <= self.n - 4:
+            raise IntegrationError(f"expected a quaternion at y[{track[0]}:{track[0] + 4}] to track, got a state of "
+                                   f"{self.n} values")
+        label = f"DOP853 ({self.name}, compiled)"
+        out = np.empty((m, t.size, self.n))
+        qoff = -1 if track is None else int(track[0])
+        args = np.zeros((m, t.size, 2) if track is not None else (1, 1, 2))
+        closest = np.zeros((m, 2 + 2 * DECADES) if track is not None else (1, 2 + 2 * DECADES))
+        if track is not None:
+            args[:, 0] = np.reshape(track[1], (m, 2))
+        stats = np.zeros((m, 3), dtype=_LONG)
+        where = np.zeros((m, 2))
+        runs = np.zeros((m, self._run_words))  # each C Run zeroed: not started
+        status = np.full(m, _CHUNK, dtype=np.intc)
+        errors: list[IntegrationError | None] = [None] * m
+        for i in np.flatnonzero(~np.all(np.isfinite(par), axis=1)):  # as solve() refuses before running
+            status[i] = _NONFINITE_START
+            errors[i] = nonfinite_start(label, t0=float(t[0]), what="the parameters")
+        budget = FIRST_CHUNK if chunk_evaluations is None else min(max(1, int(chunk_evaluations)), _LONG_MAX // 4)
+        start = time.perf_counter()
+        while m > 0:
+            call = time.perf_counter()
+            left = self._solve_batch(m, runs, self._run_words, self.n_par, par, y0, int(t.size), t, out, rt, at,
+                                     max_steps, budget, stats, where, qoff, args, closest, status)
+            if left == 0:
+                break
+            if chunk_evaluations is None:  # as many as fit in CHUNK_SECONDS at the speed just measured
+                fit = budget * CHUNK_SECONDS / max(time.perf_counter() - call, 1e-6)
+                budget = int(min(4.0 * budget, max(fit, 64.0), _LONG_MAX // 4))
+        wall = time.perf_counter() - start
+        for i in np.flatnonzero(status != _DONE):
+            if errors[i] is None:
+                errors[i] = self._error(int(status[i]), label, t, where[i], stats[i], max_steps)
+        return BatchRun(y=out, nfev=stats[:, 0].astype(np.int64), steps=stats[:, 1].astype(np.int64),
+                        rejected=stats[:, 2].astype(np.int64), status=status.astype(np.int64), errors=errors,
+                        wall=wall, args=args if track is not None else None,
+                        closest=closest[:, :2] if track is not None else None,
+                        near=closest[:, 2:].reshape(m, 2, DECADES).astype(np.int64) if track is not None else None)
+
     @staticmethod
     def _error(status: int, label: str, t: np.ndarray, where: np.ndarray, stats: np.ndarray,
                max_steps: int) -> IntegrationError:
@@ -600,5 +735,11 @@ def compiled_dop853(name: str, build: Callable[[], tuple[Any, Sequence[Any], Seq
     fn.argtypes = [vec, vec, vec, ctypes.c_int, vec, vec, ctypes.c_double, ctypes.c_double, ctypes.c_long,
                    ctypes.c_long, longs, vec, ctypes.c_int, vec, vec]
     fn.restype = ctypes.c_int
+    batch = lib.dop853_solve_batch
+    batch.argtypes = [ctypes.c_long, vec, ctypes.c_long, ctypes.c_int, vec, vec, ctypes.c_int, vec, vec, vec, vec,
+                      ctypes.c_long, ctypes.c_long, longs, vec, ctypes.c_int, vec, vec,
+                      np.ctypeslib.ndpointer(dtype=np.intc, flags="C_CONTIGUOUS")]
+    batch.restype = ctypes.c_long
     words = -(-int(lib.dop853_run_bytes()) // 8)  # the Run in doubles: 8-byte aligned
-    return CompiledDOP853(name=name, n=int(dims[0]), n_par=int(dims[1]), _solve=fn, _run_words=words)
+    return CompiledDOP853(name=name, n=int(dims[0]), n_par=int(dims[1]), _solve=fn, _run_words=words,
+                          _solve_batch=batch)

@@ -42,7 +42,7 @@ from .limits import check_fixed_steps, check_max_steps, check_outputs, first_non
 __all__ = ["Term", "Trajectory", "Ensemble", "integrate", "integrate_ensemble", "integrate_to_rtol", "MAX_ATTEMPTS",
            "METHODS", "SPLITTING_ORDERS", "SPLITTING_BACKENDS", "RICHARDSON_MARGIN", "PASSAGE_NOTE", "check_times",
            "check_method", "check_order", "check_method_options", "interval_steps", "project_quaternion",
-           "check_trajectory"]
+           "check_trajectory", "next_tolerance"]
 
 METHODS = ("DOP853", "splitting")
 #: Composition weights used for each order of the splittings (see mechderive.solvers.composition).
@@ -715,6 +715,14 @@ def integrate_to_rtol(run: Callable[[float], Any], estimate: Callable[[Any], flo
         traj = run(tol)
         est = estimate(traj)
         attempts.append({"integrator_rtol": tol, "error_estimate": est})
-        if est is None or est <= rtol or len(attempts) >= MAX_ATTEMPTS or tol <= SCIPY_MIN_RTOL:
+        tol = next_tolerance(tol, est, rtol, len(attempts))
+        if tol is None:
             return traj, attempts
-        tol = max(tol * 0.5 * rtol / est, SCIPY_MIN_RTOL)
+
+
+def next_tolerance(tol: float, est: float | None, rtol: float, attempts: int) -> float | None:
+    """The tolerance of the next run after ``attempts`` runs, the last at ``tol`` measuring ``est``, or None
+    where :func:`integrate_to_rtol` stops (one rule for a single run and a batch, :mod:`.batch`)."""
+    if est is None or est <= rtol or attempts >= MAX_ATTEMPTS or tol <= SCIPY_MIN_RTOL:
+        return None
+    return max(tol * 0.5 * rtol / est, SCIPY_MIN_RTOL)

@@ -24,7 +24,7 @@ import numpy as np
 from ..errors import MechDeriveError
 from .spec import ERROR_ESTIMATE, Sweep, has_batch
 
-__all__ = ["evaluate_chunk", "BASE_COLUMNS"]
+__all__ = ["evaluate_chunk", "summarize_batch", "BASE_COLUMNS"]
 
 #: the columns every sweep table has after the swept values and the quantities
 BASE_COLUMNS = (ERROR_ESTIMATE, "status", "path", "notes")
@@ -63,6 +63,23 @@ def _run_point(sweep: Sweep, values: dict[str, float]) -> tuple[str, dict[str, A
     return "ok", dict(report.get("summary", {})), dict(report.get("summary_error", {}))
 
 
+def _takes_scene(model: Any) -> bool:
+    """Whether the system's ``summarize_batch`` takes the sweep's scene (a system registered before the
+    keyword existed is called as it was written)."""
+    import inspect
+
+    params = inspect.signature(model.summarize_batch).parameters
+    return "scene" in params or any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params.values())
+
+
+def summarize_batch(sweep: Sweep, parameters: dict, initial: dict) -> Any:
+    """The system's :meth:`~mechderive.systems.base.System.summarize_batch` of these points, with the sweep's scene
+    where it takes it."""
+    model = sweep.scene.model
+    return model.summarize_batch(parameters, initial, sweep.summary, strict=sweep.scene.strict,
+                                 **({"scene": sweep.scene} if _takes_scene(model) else {}))
+
+
 def evaluate_chunk(sweep: Sweep, k: int) -> dict[str, np.ndarray]:
     """The table (column name → array) of chunk ``k`` of ``sweep``."""
     swept = sweep.chunk_values(k)
@@ -78,7 +95,7 @@ def evaluate_chunk(sweep: Sweep, k: int) -> dict[str, np.ndarray]:
     model = sweep.scene.model
     if n and has_batch(model):
         parameters, initial = sweep.batch_inputs(swept)
-        batch = model.summarize_batch(parameters, initial, names, strict=sweep.scene.strict)
+        batch = summarize_batch(sweep, parameters, initial)
         if batch is not None:
             fallback = np.asarray(batch.fallback, dtype=bool)
             for name in names:

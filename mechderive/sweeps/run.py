@@ -133,12 +133,11 @@ def _dask(source: str, name: str, todo: list[int], address: str, on_chunk: Calla
 def _warm(sweep: Sweep) -> None:
     """Derive and compile (or load) what the chunks need here, before the pool forks: each worker then
     starts warm instead of loading (or, on a cold cache, deriving) the same functions itself."""
-    from .evaluate import _run_point
+    from .evaluate import _run_point, summarize_batch
 
     values = {name: col[:1] for name, col in sweep.chunk_values(0).items()}
     if has_batch(sweep.scene.model):
-        parameters, initial = sweep.batch_inputs(values)
-        sweep.scene.model.summarize_batch(parameters, initial, sweep.summary, strict=sweep.scene.strict)
+        summarize_batch(sweep, *sweep.batch_inputs(values))
     _run_point(sweep, {name: float(col[0]) for name, col in values.items()})
 
 

@@ -7,7 +7,8 @@ A sweep file is a scene (:mod:`mechderive.scenes.schema`) with one more table::
     # or: random = { samples = 1000000, seed = 1, theta = [0.05, 3.09], psi_dot = [0.5, 40.0] }
     summary = ["motion_class", "nutation_period", "theta_min", "error_estimate"]
     chunk = 10000          # optional: points per chunk (default 10000 for a system with a batched
-                           # closed form, 10 otherwise; a small sweep in ~64 chunks, at least 10 points each)
+                           # closed form, 100 for a batched integration, 10 otherwise; a small sweep in
+                           # ~64 chunks, at least 10 points each)
 
 Each swept key is a key of the scene's ``[parameters]`` or ``[initial]`` (``"parameters.I1"`` where
 the name is in both; ``"omega[1]"`` for an entry of a vector key).  Start and stop may carry units
@@ -265,7 +266,7 @@ def parse_sweep(document: Mapping[str, Any], *, name: str = "") -> Sweep:
     if points > MAX_POINTS:
         raise InvalidInputError(f"sweep: expected at most {MAX_POINTS:.0e} points, got {points}")
     # a small sweep is still cut into ~64 chunks so that every worker has some (a function of the file alone)
-    default_chunk = min(BATCH_CHUNK if has_batch(scene.model) else POINT_CHUNK, max(10, -(-points // 64)))
+    default_chunk = min(batch_chunk(scene.model), max(10, -(-points // 64)))
     chunk = _count("chunk", table.get("chunk", default_chunk), 1, 10**7)
     sweep = Sweep(doc, scene, axes, kind, points, seed, tuple(quantities), chunk, name=scene.name or "",
                   source=copy.deepcopy(dict(document)))
@@ -277,6 +278,12 @@ def has_batch(model: Any) -> bool:
     from ..systems.base import System
 
     return type(model).summarize_batch is not System.summarize_batch
+
+
+def batch_chunk(model: Any) -> int:
+    """Points per chunk by default: the system's ``batch_chunk`` where it answers a batch (a closed form's
+    :data:`BATCH_CHUNK`; fewer for a system that integrates), else :data:`POINT_CHUNK`."""
+    return int(getattr(model, "batch_chunk", BATCH_CHUNK)) if has_batch(model) else POINT_CHUNK
 
 
 def _with_fingerprint(sweep: Sweep) -> Sweep:

@@ -184,6 +184,9 @@ class System:
     #: the per-motion quantities a scene may ask for in ``[output] summary = [...]`` (turning angles,
     #: periods, invariants' values), each with its unit and meaning; :meth:`summarize` computes them
     summaries: tuple[Quantity, ...] = ()
+    #: a sweep's points per chunk where :meth:`summarize_batch` answers (a closed form's NumPy batch: 10⁴, a
+    #: few ms for the chunk; a system that integrates, each point milliseconds of C, sets fewer)
+    batch_chunk: ClassVar[int] = 10_000
 
     # --- the scene schema -------------------------------------------------------------------------
 
@@ -252,15 +255,18 @@ class System:
         return {}
 
     def summarize_batch(self, parameters: Mapping[str, "np.ndarray"], initial: Mapping[str, "np.ndarray"],
-                        names: tuple[str, ...], *, strict: bool = True) -> BatchSummary | None:
+                        names: tuple[str, ...], *, strict: bool = True, scene: Any = None) -> BatchSummary | None:
         """The per-motion quantities ``names`` of N motions at once (a sweep's chunk), or None.
 
         ``parameters`` and ``initial`` map the scene's keys (SI, as :class:`~mechderive.scenes.schema.Scene`
         holds them after checking) to arrays of N values (a vector key such as the free top's ``omega``
         to an (N, 3) array).  A system with a closed form vectorises its setup here; every value it
         answers must equal :meth:`summarize`'s for the same point to 1e-12 relative, and each point it
-        cannot answer so is marked ``fallback``.  None (the default): the sweep runs every point
-        through the planner.
+        cannot answer so is marked ``fallback``.  ``scene``: the sweep's checked scene (its ``[time]``,
+        ``rtol``, ``method``, quantities), which a system that integrates needs
+        (:mod:`mechderive.systems.batch_points`: its points integrated together, each point's summaries
+        those of its single run); a system written without this keyword is called without it.  None (the
+        default): the sweep runs every point through the planner.
         """
         return None
 

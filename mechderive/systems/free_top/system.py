@@ -398,7 +398,7 @@ class FreeTop(System):
         return summarize(scene, solved, t, names)
 
     def summarize_batch(self, parameters: Mapping[str, np.ndarray], initial: Mapping[str, np.ndarray],
-                        names: tuple[str, ...], *, strict: bool = True) -> BatchSummary:
+                        names: tuple[str, ...], *, strict: bool = True, scene: Any = None) -> BatchSummary:
         """N motions at once, vectorised in NumPy/SciPy (:mod:`.batch`); ill-conditioned points fall back."""
         from .batch import summarize_batch
 

@@ -636,7 +636,7 @@ class HeavyTop(System):
         return summarize(scene, solved, t, names)
 
     def summarize_batch(self, parameters: Mapping[str, np.ndarray], initial: Mapping[str, np.ndarray],
-                        names: tuple[str, ...], *, strict: bool = True) -> BatchSummary | None:
+                        names: tuple[str, ...], *, strict: bool = True, scene: Any = None) -> BatchSummary | None:
         """Turning angles, roots, nutation period, precession, class and invariants of N tops at once, in
         NumPy from the derived constants (:mod:`.batch`); the ill-conditioned points go one by one."""
         from .batch import summarize_batch

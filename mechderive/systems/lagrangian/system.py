@@ -84,6 +84,8 @@ class LagrangianSystem(System):
     #: "exact": the closed form the toolkit finds itself (:mod:`.closed`) where L reduces to an elliptic
     #: quadrature; ``auto`` takes it when it applies to the scene's motion, else integrates and says why
     methods = ("exact", "integrate")
+    #: a sweep's points per chunk: each integrated point is milliseconds of C (:mod:`.batch`)
+    batch_chunk = 100
 
     def __init__(self, definition: "Definition", name: str = "lagrangian") -> None:
         self.name = name  # type: ignore[misc]  # an instance's own name (a program's system)
@@ -233,13 +235,9 @@ class LagrangianSystem(System):
             return self._exact(scene, t)
         from ...solvers.driver import integrate, integrate_to_rtol
 
-        d, eq = self.definition, self.equations
-        p = [scene.parameters[n] for n in d.dynamics_parameters]
-        p_all = [scene.parameters[n] for n in d.parameters]
-        y0 = ([scene.initial[q] for q in d.coordinates] + [scene.initial[q + "_dot"] for q in d.coordinates]
-              + ([float(t[0])] if d.uses_time else []))
+        y0, p, p_all = self.integration_start(scene, t)
         wanted = tuple(scene.quantities)
-        term = eq.term
+        term = self.equations.term
 
         def run(tol: float) -> Any:
             return integrate(term, y0, t, p, rtol=tol)
@@ -248,6 +246,20 @@ class LagrangianSystem(System):
             return self._error_estimate(tr, wanted, p, p_all)
 
         traj, attempts = integrate_to_rtol(run, estimate, scene.rtol)
+        return self.integrated(traj, attempts, wanted, p_all)
+
+    def integration_start(self, scene: "Scene", t: "np.ndarray") -> tuple[list, list, list]:
+        """(y0 = q, q̇[, t0], the dynamics' parameter values, every parameter's value) of ``scene``'s integration."""
+        d = self.definition
+        p = [scene.parameters[n] for n in d.dynamics_parameters]
+        p_all = [scene.parameters[n] for n in d.parameters]
+        y0 = ([scene.initial[q] for q in d.coordinates] + [scene.initial[q + "_dot"] for q in d.coordinates]
+              + ([float(t[0])] if d.uses_time else []))
+        return y0, p, p_all
+
+    def integrated(self, traj: Any, attempts: list, wanted: tuple[str, ...], p_all: Sequence[float]) -> Solved:
+        """The :class:`Solved` of an integration's last run ``traj`` (one per attempt in ``attempts``)."""
+        d, eq = self.definition, self.equations
         columns = self._columns(traj, wanted, p_all)
         info = {
             "error_estimate": attempts[-1]["error_estimate"],
@@ -405,6 +417,13 @@ class LagrangianSystem(System):
                 total += np.abs(outputs(shifted) - base)
         propagated = float(np.max(total)) if total.size else 0.0
         return max(worst, propagated) if np.isfinite(propagated) else float("nan")
+
+    def summarize_batch(self, parameters: Mapping[str, Any], initial: Mapping[str, Any], names: tuple[str, ...], *,
+                        strict: bool = True, scene: Any = None) -> Any:
+        """The summaries of a sweep's points that integrate (:mod:`.batch`); None without the sweep's scene."""
+        from .batch import summarize_batch
+
+        return None if scene is None else summarize_batch(self, scene, parameters, initial, names)
 
     def summarize(self, scene: "Scene", solved: Solved, t: "np.ndarray",
                   names: tuple[str, ...]) -> dict[str, tuple[Any, Any]]:

@@ -28,11 +28,11 @@ from typing import Any, Callable
 import numpy as np
 
 from ...core.drift import Drift, drift
-from ...errors import InvalidInputError
+from ...errors import InvalidInputError, MechDeriveError
 from ..base import OutOfReach
 
-__all__ = ["Body", "Motion", "integrate_body", "free_closed_form", "heavy_closed_form", "closed_form_plan",
-           "columns", "drifts", "invariants", "conserved_axial", "MAX_INTEGRATED_RADIANS"]
+__all__ = ["Body", "Motion", "integrate_body", "integrate_bodies", "integration_start", "free_closed_form",
+           "heavy_closed_form", "closed_form_plan", "columns", "drifts", "invariants", "conserved_axial", "MAX_INTEGRATED_RADIANS"]
 
 #: An integration may follow at most this many radians of the motion's fastest rate (as the planner's
 #: :data:`mechderive.systems.scaling.MAX_INTEGRATED_RADIANS`): beyond, a run takes minutes.
@@ -172,16 +172,12 @@ def _rate_bound(body: Body, omega0: np.ndarray, R0: np.ndarray) -> float:
     return spin * coupling + math.sqrt(body.mgc / I.min())
 
 
-def integrate_body(body: Body, initial: dict, t: np.ndarray, rtol: float, *, need: tuple[str, ...] = ("omega",
-                   "rotation"), backend: str = "auto") -> Motion:
-    """Integrate the body from the checked ``initial`` (φ, θ, ψ, ω) at ``t[0]`` through ``t``, to ``rtol``.
-
-    ``need``: the output families whose estimate counts ("omega", "rotation", "euler").
-    """
+def integration_start(body: Body, initial: dict, t: np.ndarray) -> tuple[Any, bool, list[float], tuple, list[float]]:
+    """(the term, whether t is a state, y0 = (ω, q[, t0]), the half-angles (σ0, δ0) to follow, the parameter
+    values) of an integration from the checked ``initial``; refuses a run longer than
+    :data:`MAX_INTEGRATED_RADIANS` of the motion's fastest rate, naming ``[time].t_end``."""
     from ...kinematics.conversions import euler_to_quaternion, quaternion_to_matrix
-    from ...solvers.dop853 import reference_tolerance
-    from ...solvers.driver import integrate, integrate_to_rtol
-    from ...solvers.half_angles import euler_angles_from_half_angles, initial_half_angles, output_error_estimates
+    from ...solvers.half_angles import initial_half_angles
 
     term, timed = _term(body.torque)
     w0 = np.asarray(initial["omega"], dtype=float)
@@ -195,37 +191,38 @@ def integrate_body(body: Body, initial: dict, t: np.ndarray, rtol: float, *, nee
                 f"({MAX_INTEGRATED_RADIANS:.6g} rad at this motion's fastest rate, {rate:.6g} rad/s: a longer run "
                 f"would take many minutes), got {float(t[-1]):.6g}")
     y0 = [*w0, *q0, *([float(t[0])] if timed else [])]
-    args0 = initial_half_angles(initial["phi"], initial["psi"])
-    par = body.values
+    return term, timed, y0, initial_half_angles(initial["phi"], initial["psi"]), body.values
 
-    def one(tol: float) -> Any:
-        return integrate(term, y0, t, par, rtol=tol, atol=tol * 1e-3, estimate_error=False, track=args0,
-                         backend=backend)
 
-    def outputs(tr: Any) -> tuple:
-        q = tr.y[:, 3:7]
-        norm = np.linalg.norm(q, axis=-1, keepdims=True)
-        q = q / norm
-        return tr.y[:, :3], q, euler_angles_from_half_angles(q, _sleeping_split(q, tr.args)), \
-            float(np.max(np.abs(norm - 1.0)))
+def _outputs(tr: Any) -> tuple:
+    """(ω, the unit quaternion, the Euler angles, max ||q| - 1|) of a run."""
+    from ...solvers.half_angles import euler_angles_from_half_angles
 
-    def run(tol: float) -> dict:
-        main = one(tol)
-        rt_ref, factor = reference_tolerance(tol)
-        ref = integrate(term, y0, t, par, rtol=rt_ref, atol=tol * 1e-3 * rt_ref / tol, estimate_error=False,
-                        track=args0, backend=backend)
-        w, q, ang, _ = out = outputs(main)
-        w_r, q_r, ang_r, _ = outputs(ref)
-        est = output_error_estimates((w, q, ang, None), (w_r, q_r, ang_r, None), factor, main.n_steps)
-        est = {"omega": est["omega"], "rotation": est["rotation"], "euler": est["euler"]}
-        kind = (f"distance to a rerun at rtol={rt_ref:.2g}" + (f", × {factor:.3g}" if factor != 1.0 else "")
-                + ("" if rt_ref < tol else " (looser: no tighter run is possible; an upper bound)"))
-        return dict(main=main, out=out, estimates=est, kind=kind)
+    q = tr.y[:, 3:7]
+    norm = np.linalg.norm(q, axis=-1, keepdims=True)
+    q = q / norm
+    return tr.y[:, :3], q, euler_angles_from_half_angles(q, _sleeping_split(q, tr.args)), \
+        float(np.max(np.abs(norm - 1.0)))
 
-    def estimate(r: dict) -> float:
-        return max(r["estimates"][k] for k in need) if need else 0.0
 
-    r, attempts = integrate_to_rtol(run, estimate, rtol)
+def _estimated(main: Any, ref: Any, tol: float) -> dict:
+    """A run at ``tol`` with its error measured against the reference run ``ref`` (ω, R, the Euler angles)."""
+    from ...solvers.dop853 import reference_tolerance
+    from ...solvers.half_angles import output_error_estimates
+
+    rt_ref, factor = reference_tolerance(tol)
+    w, q, ang, _ = out = _outputs(main)
+    w_r, q_r, ang_r, _ = _outputs(ref)
+    est = output_error_estimates((w, q, ang, None), (w_r, q_r, ang_r, None), factor, main.n_steps)
+    est = {"omega": est["omega"], "rotation": est["rotation"], "euler": est["euler"]}
+    kind = (f"distance to a rerun at rtol={rt_ref:.2g}" + (f", × {factor:.3g}" if factor != 1.0 else "")
+            + ("" if rt_ref < tol else " (looser: no tighter run is possible; an upper bound)"))
+    return dict(main=main, out=out, estimates=est, kind=kind)
+
+
+def _motion(t: np.ndarray, r: dict, attempts: list, need: tuple[str, ...], timed: bool) -> Motion:
+    from ...kinematics.conversions import quaternion_to_matrix
+
     main = r["main"]
     w, q, ang, norm_drift = r["out"]
     info = {"solver": "integration: DOP853 on (ω, q)" + (", t carried as a state" if timed else ""),
@@ -235,6 +232,81 @@ def integrate_body(body: Body, initial: dict, t: np.ndarray, rtol: float, *, nee
             "quaternion_norm_drift": norm_drift}
     return Motion(t=t, omega=w, R=quaternion_to_matrix(q), quaternion=q, angles=ang, estimates=r["estimates"],
                   info=info, solution=main)
+
+
+def integrate_body(body: Body, initial: dict, t: np.ndarray, rtol: float, *, need: tuple[str, ...] = ("omega",
+                   "rotation"), backend: str = "auto") -> Motion:
+    """Integrate the body from the checked ``initial`` (φ, θ, ψ, ω) at ``t[0]`` through ``t``, to ``rtol``.
+
+    ``need``: the output families whose estimate counts ("omega", "rotation", "euler").
+    """
+    from ...solvers.dop853 import reference_tolerance
+    from ...solvers.driver import integrate, integrate_to_rtol
+
+    term, timed, y0, args0, par = integration_start(body, initial, t)
+
+    def one(tol: float, at: float) -> Any:
+        return integrate(term, y0, t, par, rtol=tol, atol=at, estimate_error=False, track=args0, backend=backend)
+
+    def run(tol: float) -> dict:
+        rt_ref, _ = reference_tolerance(tol)
+        return _estimated(one(tol, tol * 1e-3), one(rt_ref, tol * 1e-3 * rt_ref / tol), tol)
+
+    r, attempts = integrate_to_rtol(run, lambda r: _estimate(r, need), rtol)
+    return _motion(t, r, attempts, need, timed)
+
+
+def _estimate(r: dict, need: tuple[str, ...]) -> float:
+    return max(r["estimates"][k] for k in need) if need else 0.0
+
+
+def integrate_bodies(bodies: list[Body], initials: list[dict], t: np.ndarray, rtol: float, *,
+                     need: tuple[str, ...] = ("omega", "rotation")) -> list[Motion | MechDeriveError] | None:
+    """:func:`integrate_body` for M bodies with one torque (a sweep's points), their runs batched through
+    the compiled stepper (:mod:`mechderive.solvers.batch`): [each point's motion, equal to
+    :func:`integrate_body`'s bit for bit, or the error that stopped it (its refusal of the run's length,
+    or the integrator's)]; None without a C compiler."""
+    from ...solvers.batch import integrate_batch, integrate_to_rtol_batch
+    from ...solvers.dop853 import reference_tolerance
+
+    starts: list[Any] = []
+    for body, initial in zip(bodies, initials):
+        try:
+            starts.append(integration_start(body, initial, t))
+        except MechDeriveError as exc:
+            starts.append(exc)
+    ok = [i for i, s in enumerate(starts) if not isinstance(s, MechDeriveError)]
+    out: list[Any] = list(starts)
+    if not ok:
+        return out
+    term, timed = starts[ok[0]][0], starts[ok[0]][1]
+    if any(starts[i][0] is not term for i in ok):
+        raise InvalidInputError("expected bodies with one applied torque (one term) in a batch")
+    y0 = np.array([starts[i][2] for i in ok])
+    args0 = np.array([starts[i][3] for i in ok])
+    par = np.array([starts[i][4] for i in ok])
+
+    def run(tols: np.ndarray, points: np.ndarray) -> list | None:
+        tols = [float(x) for x in tols]
+        refs = [reference_tolerance(tol)[0] for tol in tols]
+        main = integrate_batch(term, y0[points], t, par[points], rtol=tols, atol=[tol * 1e-3 for tol in tols],
+                               estimate_error=False, track=args0[points])
+        if main is None:
+            return None
+        ended = [j for j, m in enumerate(main) if not isinstance(m, MechDeriveError)]  # their references
+        ref = dict(zip(ended, integrate_batch(term, y0[points[ended]], t, par[points[ended]],
+                                              rtol=[refs[j] for j in ended],
+                                              atol=[tols[j] * 1e-3 * refs[j] / tols[j] for j in ended],
+                                              estimate_error=False, track=args0[points[ended]]) if ended else []))
+        return [m if isinstance(m, MechDeriveError) else ref[j] if isinstance(ref[j], MechDeriveError) else
+                _estimated(m, ref[j], tols[j]) for j, m in enumerate(main)]
+
+    done = integrate_to_rtol_batch(run, lambda r, _: _estimate(r, need), rtol, len(ok))
+    if done is None:
+        return None
+    for i, d in zip(ok, done):
+        out[i] = d if isinstance(d, MechDeriveError) else _motion(t, d[0], d[1], need, timed)
+    return out
 
 
 def _sleeping_split(q: np.ndarray, args: np.ndarray) -> np.ndarray:

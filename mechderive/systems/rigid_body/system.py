@@ -226,6 +226,8 @@ class RigidBody(System):
                             "R11", "R12", "R13", "R21", "R22", "R23", "R31", "R32", "R33")
     summaries = _SUMMARIES
     methods: tuple[str, ...] = ("exact", "integrate")
+    #: a sweep's points per chunk: each integrated point is milliseconds of C (:mod:`.batch`)
+    batch_chunk = 100
     bytes_per_sample = 1200
 
     def __init__(self, torque: Any = None) -> None:
@@ -290,9 +292,24 @@ class RigidBody(System):
             motion.info["why"] = self._why_integrated(scene, body)
         else:
             raise InvalidInputError(f"expected method one of {', '.join(map(repr, self.methods))}, got {method!r}")
+        return self.solved(names, motion, body)
+
+    @staticmethod
+    def solved(names: tuple[str, ...], motion: Any, body: Any) -> Solved:
+        """The :class:`Solved` of a solved ``motion``: the columns ``names`` and the estimate of their families."""
+        from . import motion as mo
+
+        need = mo.families(names)
         est = max((motion.estimates[k] for k in need if k in motion.estimates), default=0.0)
         info = {"error_estimate": float(est), **motion.info}
         return Solved(mo.columns(names, motion, body), info, motion)
+
+    def summarize_batch(self, parameters: Mapping[str, np.ndarray], initial: Mapping[str, np.ndarray],
+                        names: tuple[str, ...], *, strict: bool = True, scene: Any = None) -> Any:
+        """The summaries of a sweep's points that integrate (:mod:`.batch`); None without the sweep's scene."""
+        from .batch import summarize_batch
+
+        return None if scene is None else summarize_batch(self, scene, parameters, initial, names)
 
     @staticmethod
     def _why_integrated(scene: Any, body: Any) -> str:
