@@ -59,8 +59,11 @@ Not covered (the caller integrates instead; :class:`NotElliptic` says why): a co
 axis on the motion that 1 − m < 1e-15 (a nearly double root the motion passes slowly), a quadratic whose two
 roots are too near each other or the real axis to resolve at 40 digits (one double to the working precision is
 solved: :func:`~mechderive.solvers.quadrature_open.exponential_double_root`), an unstable equilibrium (a start
-on a double root with P'' > 0), the cyclic rates at m = 1, on the cn and tan forms and with poles on the
-elementary forms, and rates with complex poles, poles on the motion, or a polynomial part of degree > 1 in w.
+on a double root with P'' > 0), the cyclic rates on the cn and tan forms, and, for 0 < m < 1, rates with complex
+poles, poles on the motion, or a polynomial part of degree > 1 in w.  At m = 0 (u = M(sin²v), a bounded quadratic)
+and m = 1 (u = M(tanh²v)) u is rational in e^{2iv} or e^{2v}, and any rational rate — multiple and complex poles
+included — integrates by partial fractions in that variable (:mod:`mechderive.solvers.quadrature_rational`, to which
+:func:`rate_integral` hands them, with the elementary forms' rates that have poles).
 """
 
 from __future__ import annotations
@@ -763,10 +766,17 @@ def rate_integral(motion: EllipticMotion, numerator: Sequence, denominator: Sequ
     mpmath reads); raises :class:`NotElliptic` where the partial fractions in w are not the simple kind the
     module docstring lists."""
     mp = _mp()
-    if getattr(motion, "elementary", False):  # polynomial or exponential in t: a polynomial rate in closed form
+    from .quadrature_rational import rational_path, rational_rate_integral
+
+    path = rational_path(motion)
+    polynomial = all(mp.mpf(x) == 0 for x in list(denominator)[:-1])
+    if getattr(motion, "elementary", False) and polynomial:  # polynomial or exponential in t: Σ C_j e^{jκt}
         from .quadrature_open import elementary_rate_integral
 
         return elementary_rate_integral(motion, numerator, denominator)
+    if path is not None:
+        # u rational in e^{κt}, e^{2iv} (m = 0), e^{2v} (m = 1) or t: partial fractions in that variable, any poles
+        return rational_rate_integral(motion, numerator, denominator)
     if isinstance(motion, EllipticMotionCn):
         raise NotElliptic("expected a motion in sn² for a cyclic coordinate's Π, got a cn form (a quartic with "
                           "complex roots, or a cubic with one real root): its rates are not covered")
