@@ -175,21 +175,22 @@ def _u_by_hand(motion, path):
 PATHS = [
     # (name, P's coefficients, u0, direction, N, D, path, times)
     # (u − 1.5)²(u² − u + 0.5), its coefficients exact in binary: a double root the doubles do not split
-    ("circle, a complex pair and a double real pole", [-1.0, 0.0, 1.0], 0.2, 1, [1.0, 0.0, 2.0],
-     [1.0, -4.0, 5.75, -3.75, 1.125], "circle", (0.7, 9.0, 250.0)),
+    pytest.param("circle, a complex pair and a double real pole", [-1.0, 0.0, 1.0], 0.2, 1, [1.0, 0.0, 2.0],
+                 [1.0, -4.0, 5.75, -3.75, 1.125], "circle", (0.7, 9.0, 250.0), marks=pytest.mark.slow),
     ("ray: a separatrix, a pole beyond its double root", 2.0 * np.poly((-1.0, 1.0, 1.0)), 0.0, 1, [1.0, -0.2],
      [1.0, -1.3], "ray", (0.5, 3.0, 40.0)),
-    ("ray: the hyperbolic quadratic, complex poles", [4.0, 0.0, -4.0], 1.5, -1, [1.0],
-     [1.0, 0.0, 0.0, 2.0], "ray", (-2.0, 0.4, 3.0)),
-    ("exp: no real root, a double pole off the path", [1.0, -1.0, 2.5], 0.3, 1, [1.0, 0.0],
-     np.poly((0.5 + 1j, 0.5 - 1j, 0.5 + 1j, 0.5 - 1j)).real, "exp", (-3.0, 0.8, 6.0)),
+    pytest.param("ray: the hyperbolic quadratic, complex poles", [4.0, 0.0, -4.0], 1.5, -1, [1.0],
+                 [1.0, 0.0, 0.0, 2.0], "ray", (-2.0, 0.4, 3.0), marks=pytest.mark.slow),
+    pytest.param("exp: no real root, a double pole off the path", [1.0, -1.0, 2.5], 0.3, 1, [1.0, 0.0],
+                 np.poly((0.5 + 1j, 0.5 - 1j, 0.5 + 1j, 0.5 - 1j)).real, "exp", (-3.0, 0.8, 6.0), marks=pytest.mark.slow),
     ("exp: a double root, towards it", [1.0, -2.0, 1.0], 3.0, -1, [2.0], [1.0, 0.0, 1.0], "exp", (0.5, 5.0, 60.0)),
     ("line: accelerated, complex poles", [-2.0, 1.0], 0.0, 1, [1.0, 0.0, 0.0], [1.0, 0.0, 0.25], "line",
      (0.3, 1.0, 4.0)),
 ]
 
 
-@pytest.mark.parametrize("name, coeffs, u0, direction, num, den, path, times", PATHS, ids=[c[0] for c in PATHS])
+@pytest.mark.parametrize("name, coeffs, u0, direction, num, den, path, times", PATHS,
+                         ids=[(c.values if hasattr(c, "values") else c)[0] for c in PATHS])
 def test_rates_with_poles_integrate_on_every_rational_path(name, coeffs, u0, direction, num, den, path, times):
     motion = elliptic_motion(coeffs, u0, direction)
     integral = rate_integral(motion, num, den)
@@ -226,3 +227,79 @@ def test_a_pole_the_motion_reaches_bounds_the_integral():
     assert np.max(np.abs(integral(t) - np.array(want, float))) <= 1e-14 * 10
     with pytest.raises(NotElliptic, match="start on one"):
         rate_integral(elliptic_motion([-2.0, 1.0], 0.0, 1), [1.0], [1.0, 0.0])
+
+
+# --- the cn and tan forms: the rate's Fourier series in the Jacobi argument ------------------------------------
+
+def _u_cn_by_hand(motion):
+    """u(τ) from the cn or tan form's definition, Jacobi functions by mpmath at the caller's precision."""
+    mp = mpmath.mp
+    from mechderive.solvers.quadrature_open import EllipticMotionTan
+
+    def u(tau):
+        v = motion.kappa * tau + motion.v_start
+        sn, cn = mp.ellipfun("sn", v, m=motion.m), mp.ellipfun("cn", v, m=motion.m)
+        if isinstance(motion, EllipticMotionTan):
+            alpha, b, s0, c0 = motion.mobius
+            return alpha + b * (s0 * cn + c0 * sn) / (c0 * cn - s0 * sn)
+        A, B, C, D = motion.mobius
+        return (A + B * cn) / (C + D * cn)
+
+    return u
+
+
+CN_FORMS = [
+    # (name, P's coefficients, u0, direction, N, D, times as fractions of the escape times, or absolute)
+    ("cn: a quartic with a complex pair, u between its real roots", -np.real(np.poly((-1.0, 2.0, 1 + 2j, 1 - 2j))),
+     0.3, 1, [1.0, 0.5], [1.0, 0.0, 4.0], (0.8,)),
+    pytest.param("cn: the same over ten periods, and its advance", -np.real(np.poly((-1.0, 2.0, 1 + 2j, 1 - 2j))), 0.3, 1,
+                 [1.0, 0.5], [1.0, 0.0, 4.0], (41.3,), marks=pytest.mark.slow),
+    ("tan: a quartic with no real root", np.real(np.poly((1j, -1j, 0.5 + 2j, 0.5 - 2j))), 0.3, 1,
+     [1.0, 0.0], [1.0, 0.0, 9.0], (0.9,)),
+    pytest.param("tan: m = 0.99 (1024 samples a period)", np.real(np.poly((1j, -1j, 2 + 0.5j, 2 - 0.5j))), 0.3, 1,
+                 [1.0, 0.0, 0.0], [1.0, 0.0, 0.0, 1.0, 1.0], (-0.5, 0.9), marks=pytest.mark.slow),
+    pytest.param("cn: a cubic with one real root", np.real(np.poly((0.5, 1 + 1j, 1 - 1j))), 1.0, 1, [1.0, 0.0],
+                 [1.0, 0.0, 3.0], (-0.5, 0.9), marks=pytest.mark.slow),
+    pytest.param("cn: a quartic outside its real roots", [1.0, 0.0, -2.0, 0.0, -0.5], 1.8, 1, [2.0], [1.0, 0.0, 1.0],
+                 (-0.5, 0.9), marks=pytest.mark.slow),
+]
+
+
+@pytest.mark.parametrize("name, coeffs, u0, direction, num, den, times", CN_FORMS,
+                         ids=[(c.values if hasattr(c, "values") else c)[0] for c in CN_FORMS])
+def test_rates_on_the_cn_and_tan_forms_against_a_quadrature(name, coeffs, u0, direction, num, den, times):
+    """∫ R dt by the Fourier series of R(u(v)) against mpmath's quadrature of R along u(τ) written from the form, at
+    30 digits; the escaping forms within their escape times; the estimate (doubles against the 30-digit refit)
+    bounds the error actually made."""
+    motion = elliptic_motion(coeffs, u0, direction)
+    integral = rate_integral(motion, num, den)
+    if motion.escape_times is not None:
+        times = tuple(f * motion.escape_times[0 if f < 0 else 1] * (-1 if f < 0 else 1) for f in times)
+    got = integral(np.array(times))
+    with mpmath.workdps(30):
+        u = _u_cn_by_hand(motion)
+        rate = lambda tau: mpmath.polyval(num, u(tau)) / mpmath.polyval(den, u(tau))  # noqa: E731
+        period = motion.u_period
+        if motion.escape_times is None and max(times) > period:  # whole periods from the advance's own quadrature
+            per_period = mpmath.quad(rate, mpmath.linspace(0, period, 3))
+            assert abs(float(integral.advance) - float(per_period)) <= 1e-14 * abs(float(per_period))
+        for tau, value in zip(times, got):
+            whole = mpmath.floor(tau / period) if motion.escape_times is None and tau > period else 0
+            want = (whole * per_period if whole else 0) + mpmath.quad(rate, [0, tau - (whole * period if whole else 0)])
+            error = abs(value - float(want))
+            # measured ≤ 2e-16 of max(1, |∫|) here
+            assert error <= 1e-14 * max(1.0, abs(float(want))), (tau, value, want)
+            estimate = abs(value - float(integral.value_mp(tau))) + 2.0**-52 * abs(value)
+            assert error <= 4 * estimate, (error, estimate)
+
+
+def test_rates_the_cn_and_tan_forms_cannot_integrate_are_refused_with_the_reason():
+    tan = elliptic_motion(np.real(np.poly((1j, -1j, 2 + 0.5j, 2 - 0.5j))), 0.3, 1)
+    with pytest.raises(NotElliptic, match="pole at u = 0.5 that u reaches"):
+        rate_integral(tan, [1.0], [1.0, -0.5])  # u takes every real value: it passes the pole
+    with pytest.raises(NotElliptic, match="deg N = 1 > deg D = 0"):
+        rate_integral(tan, [1.0, 0.0], [1.0])  # ċ = u grows without bound at the escape
+    cn = elliptic_motion(-np.real(np.poly((-1.0, 2.0, 1 + 2j, 1 - 2j))), 0.3, 1)
+    with pytest.raises(NotElliptic, match="pole at u = 1.5"):
+        rate_integral(cn, [1.0], [1.0, -1.5])  # u oscillates on (−1, 2) through 1.5
+    rate_integral(cn, [1.0], [1.0, -2.5])  # a pole beyond the motion's range: integrated
