@@ -280,9 +280,7 @@ def test_configurations_not_covered_are_refused_with_the_reason():
     # roots 1e-25 apart, resolved by the 40-digit roots: a periodic motion of period ~ln(1e25)/κ, not a separatrix
     with pytest.raises(NotElliptic, match="1.0e-25 apart"):
         elliptic_motion(["-1", "-1.0000000000000000000000001", "1.0", "1.0000000000000000000000001"], 0.3, 1)
-    motion = elliptic_motion(np.poly((0.0, 1.0, 1.0)), 0.0, 0)  # a separatrix: its rates are refused
-    with pytest.raises(NotElliptic, match="m = 1"):
-        rate_integral(motion, [1.0], [1.0, 2.0])
+    # a separatrix's rates (m = 1) are integrated in e^{2v}: tests/test_s3_6_closed_form_rates.py
 
 
 # --- degree ≤ 1: uniform and uniformly accelerated motion -------------------------------------------------------
@@ -730,8 +728,7 @@ def test_polynomial_rates_integrate_on_the_elementary_forms(name, coeffs, u0, di
     with mp.workdps(30):
         assert max(abs(float(integral.value_mp(float(x))) - y) for x, y in zip(t[::25], integral(t[::25]))) <= \
             1e-15 * (1 + np.max(np.abs(ref)))
-    with pytest.raises(NotElliptic, match="poles in u"):
-        rate_integral(motion, [1.0], [1.0, 0.0])  # R = 1/u: the motion may pass its pole
+    # rates with poles in u on these forms (partial fractions in e^{κt} or t): tests/test_s3_6_closed_form_rates.py
 
 
 def test_projectile_is_a_parabola_in_closed_form():

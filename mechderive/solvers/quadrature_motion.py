@@ -29,7 +29,8 @@ A start on a double root u_s of P with P''(u_s) < 0 is a steady motion: u ≡ u_
 R(u_s)·t (the degenerate M(w) = u_s).
 
 A quartic with two real roots and a complex pair oscillates between the real ones in cn
-(:class:`EllipticMotionCn`, Byrd & Friedman 259.00); its cyclic rates are not covered.
+(:class:`EllipticMotionCn`, Byrd & Friedman 259.00); its cyclic rates, and those of the other cn and tan forms, are
+integrated by the rate's Fourier series in v with a measured error (:mod:`mechderive.solvers.quadrature_fourier`).
 
 m = 1 (``EllipticMotion.asymptotic``): from its turning point a the motion goes towards b in infinite time
 and never returns, with sn = tanh and cn = dn = sech — a separatrix, where b is a double root of P (the
@@ -59,8 +60,12 @@ Not covered (the caller integrates instead; :class:`NotElliptic` says why): a co
 axis on the motion that 1 − m < 1e-15 (a nearly double root the motion passes slowly), a quadratic whose two
 roots are too near each other or the real axis to resolve at 40 digits (one double to the working precision is
 solved: :func:`~mechderive.solvers.quadrature_open.exponential_double_root`), an unstable equilibrium (a start
-on a double root with P'' > 0), the cyclic rates at m = 1, on the cn and tan forms and with poles on the
-elementary forms, and rates with complex poles, poles on the motion, or a polynomial part of degree > 1 in w.
+on a double root with P'' > 0), rates on the cn and tan forms with a real pole on u's range or growing at an escape
+(:mod:`~mechderive.solvers.quadrature_fourier` says which), and, for 0 < m < 1, rates with complex
+poles, poles on the motion, or a polynomial part of degree > 1 in w.  At m = 0 (u = M(sin²v), a bounded quadratic)
+and m = 1 (u = M(tanh²v)) u is rational in e^{2iv} or e^{2v}, and any rational rate — multiple and complex poles
+included — integrates by partial fractions in that variable (:mod:`mechderive.solvers.quadrature_rational`, to which
+:func:`rate_integral` hands them, with the elementary forms' rates that have poles).
 """
 
 from __future__ import annotations
@@ -304,7 +309,8 @@ class EllipticMotionCn(EllipticMotion):
     """u(t) = (A + B cn v)/(C + D cn v), v = κ t + v_s: a quartic with two real roots a < b and a complex pair,
     u oscillating between them (Byrd & Friedman 259.00: cn v = ((b − u)A − (u − a)B)/((b − u)A + (u − a)B) with
     A, B the distances from b and a to the complex roots, m = ((b − a)² − (A − B)²)/(4AB), κ² = |lead|·A·B).
-    The period of u is 4K/κ.  Folds, rotations and the cyclic rates' Π are not offered on this form."""
+    The period of u is 4K/κ.  Folds and rotations are not offered on this form; the cyclic rates integrate by their
+    Fourier series in v (:mod:`mechderive.solvers.quadrature_fourier`), not by Π."""
 
     def u(self, t: Any, jac: tuple | None = None) -> np.ndarray:
         sn, cn, dn, _, _ = self.jacobi(t) if jac is None else jac
@@ -763,16 +769,22 @@ def rate_integral(motion: EllipticMotion, numerator: Sequence, denominator: Sequ
     mpmath reads); raises :class:`NotElliptic` where the partial fractions in w are not the simple kind the
     module docstring lists."""
     mp = _mp()
-    if getattr(motion, "elementary", False):  # polynomial or exponential in t: a polynomial rate in closed form
+    from .quadrature_rational import rational_path, rational_rate_integral
+
+    path = rational_path(motion)
+    polynomial = all(mp.mpf(x) == 0 for x in list(denominator)[:-1])
+    if getattr(motion, "elementary", False) and polynomial:  # polynomial or exponential in t: Σ C_j e^{jκt}
         from .quadrature_open import elementary_rate_integral
 
         return elementary_rate_integral(motion, numerator, denominator)
+    if path is not None:
+        # u rational in e^{κt}, e^{2iv} (m = 0), e^{2v} (m = 1) or t: partial fractions in that variable, any poles
+        return rational_rate_integral(motion, numerator, denominator)
     if isinstance(motion, EllipticMotionCn):
-        raise NotElliptic("expected a motion in sn² for a cyclic coordinate's Π, got a cn form (a quartic with "
-                          "complex roots, or a cubic with one real root): its rates are not covered")
-    if motion.asymptotic:
-        raise NotElliptic("expected a periodic motion for a cyclic coordinate's Π, got m = 1 (a separatrix or a "
-                          "hyperbolic escape): its rates are not covered")
+        # u Möbius in cn (or a tangent of am): the rate's Fourier series in v, its error measured by a 30-digit refit
+        from .quadrature_fourier import fourier_rate_integral
+
+        return fourier_rate_integral(motion, numerator, denominator)
     with mp.workdps(DPS):
         N = [mp.mpf(x) for x in numerator]
         Dn = [mp.mpf(x) for x in denominator]

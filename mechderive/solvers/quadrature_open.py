@@ -44,8 +44,9 @@ projectile's horizontal coordinate, ẏ = p_y − w x with a magnetic-like coupl
 * **a quadratic with a double root r**, P = c2 (u − r)², c2 > 0, from u0 ≠ r: u = r + (u0 − r) e^{±κt}
   (:func:`exponential_double_root`), towards r or away from it, never reaching it.
 
-Not covered here: rates with poles in u (a rational R,
-which the motion may pass) on the elementary forms, and any rate on the cn and tan forms.
+A rate with poles in u (a rational R) on these forms, and on the m = 0 and m = 1 forms, integrates by partial
+fractions in e^{κt} (or t): :mod:`mechderive.solvers.quadrature_rational`; on the cn and tan forms by its Fourier
+series in the Jacobi argument, its error measured by a 30-digit refit: :mod:`mechderive.solvers.quadrature_fourier`.
 """
 
 from __future__ import annotations

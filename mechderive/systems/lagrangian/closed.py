@@ -104,6 +104,9 @@ class ClosedMotion:
         self.names = tuple(d.coordinates)
         self.remaining = model.remaining_coordinates[0].func.__name__
         self.cyclic = tuple(c.func.__name__ for c in model.cyclic_coordinates if c.func.__name__ != along)
+        if along is not None:
+            # along an orbit the time itself is a coordinate of the same kind: dt/dc = 1/ċ(u), rational in u
+            self.cyclic = (*self.cyclic, "t")
         self.parameters = dict(parameters)
         self.initial = dict(initial)
         self.shape = SHAPES[found.name]
@@ -255,13 +258,38 @@ class ClosedMotion:
         """ċ = N(u)/D(u) of the cyclic coordinate ``name``: N's and D's coefficients (highest first, 40 digits)."""
         from ...solvers.quadrature_motion import DPS
 
-        entry = self.system.cyclic_rates()[name]
+        entry = self._rates()[name]
         if isinstance(entry, str):
             raise OutOfReach(f"no closed form for {name}: {entry}")
         N, D = entry
         mp = _mp()
         with mp.workdps(DPS):
             return [self._number(c) for c in N.all_coeffs()], [self._number(c) for c in D.all_coeffs()]
+
+    def _rates(self) -> dict:
+        """{name: (N, D) or the reason}: ċ = N(u)/D(u) for each cyclic coordinate; along an orbit measured by a cyclic
+        coordinate a (Binet's φ), the rates in a instead — dt/da = 1/ȧ = D_a/N_a, dc/da = ċ/ȧ = N_c D_a/(D_c N_a) —
+        with the orbit's substitution."""
+        if self.along is None:
+            return self.system.cyclic_rates()
+        if "_orbit_rates" not in self.__dict__:
+            from ...core.quadrature import cyclic_rates
+
+            rates = cyclic_rates(self.system.reduced_model(), self.found)
+            base = rates[self.along]
+            out: dict = {}
+            for name, entry in rates.items():
+                if name == self.along:
+                    continue
+                out[name] = base if isinstance(base, str) else entry if isinstance(entry, str) else \
+                    (entry[0] * base[1], entry[1] * base[0])
+            out["t"] = base if isinstance(base, str) else (base[1], base[0])
+            self.__dict__["_orbit_rates"] = out
+        return self.__dict__["_orbit_rates"]
+
+    def _start_value(self, name: str) -> float:
+        """c(0) of a cyclic output: the scene's initial value, 0 for the time along an orbit (t = 0 at the start)."""
+        return 0.0 if name == "t" and self.along is not None else float(self.initial[name])
 
     @_per_instance
     def rate_poles(self, name: str) -> tuple:
@@ -324,7 +352,8 @@ class ClosedMotion:
         """``<q>_min``, ``<q>_max`` (the turning points of q; the fold's mirror image for a libration through a
         fold) or ``<c>_per_period`` (c's advance over one period of q)."""
         if name.endswith("_per_period"):
-            if getattr(self.motion, "elementary", False) or self.motion.escape_times is not None:
+            if getattr(self.motion, "elementary", False) or self.motion.escape_times is not None or \
+                    self.kind.startswith("unbounded"):
                 raise OutOfReach(f"{name}: no period ({self.kind})")
             integral, _, _ = self.rate(name[: -len("_per_period")])
             return float(integral.advance * (2 if self.kind == "libration through a fold" else 1))
@@ -442,10 +471,23 @@ class ClosedMotion:
         for c in self.cyclic:
             if c in wanted:
                 integral, _, _ = self.rate(c)
-                out[c] = float(self.initial[c]) + integral(t, jac)
+                self._within_singular_times(c, integral, t)
+                out[c] = self._start_value(c) + integral(t, jac)
             if c + "_dot" in wanted:
                 out[c + "_dot"] = self._rate_values(c, t, jac)
         return out
+
+    def _within_singular_times(self, name: str, integral: Any, t: np.ndarray) -> None:
+        """Refuse times at or past a pole of the rate that the motion reaches (the integral diverges there: dt/dφ =
+        m/(ℓu²) of Kepler's hyperbola where u = 1/r reaches 0)."""
+        bounds = getattr(integral, "singular_times", None)
+        if bounds is None or not t.size:
+            return
+        lo, hi = bounds
+        if not (lo < np.min(t) and np.max(t) < hi):
+            var = "t" if self.along is None else self.along
+            raise OutOfReach(f"{name}: its rate has a pole the motion reaches at {var} = {hi:.12g} (and, backwards, at "
+                             f"{lo:.12g}): the integral diverges there, the closed form stops before it")
 
     def check_derivatives(self, t: np.ndarray, names: Sequence[str]) -> str | None:
         """None, or what failed: at up to 5 of the times, each requested angle's central difference over
@@ -459,6 +501,11 @@ class ClosedMotion:
             # u = u0 + u̇0 t + (c1/4) t² has no time scale of its own (its κ = 1 is a unit): resolve the outputs' span
             # (x = √u of an inverse-square repulsion over 1 ms has its curvature there, not over seconds)
             h = min(h, 1e-4 * float(np.ptp(t)))
+        singular = [getattr(self.rate(c)[0], "singular_times", None) for c in self.cyclic if c in names]
+        for lo, hi in (x for x in singular if x is not None):
+            # near a pole of a rate the motion reaches (Kepler's hyperbola along φ: dt/dφ ~ (φ∞ − φ)⁻²), as near an
+            # escape below: the step a thousandth of the distance to it
+            h = min(h, 1e-3 * min(hi - float(np.max(picks)), float(np.min(picks)) - lo))
         escape = self.motion.escape_times
         if escape is not None:
             # near a blow-up u ~ (t₊ − t)⁻²: the truncation is ~ (h/(t₊ − t))² of the rate, kept at ~10⁻⁶ (the
@@ -476,8 +523,9 @@ class ClosedMotion:
             bad = np.abs(diff - rate) > 1e-4 * scale
             if np.any(bad):
                 i = int(np.argmax(bad))
-                return (f"d{n}/dt from the closed form ({rate[i]:.6g}) disagrees with the difference of {n} "
-                        f"({diff[i]:.6g}) at t = {picks[i]:.6g}")
+                var = "t" if self.along is None else self.along
+                return (f"d{n}/d{var} from the closed form ({rate[i]:.6g}) disagrees with the difference of {n} "
+                        f"({diff[i]:.6g}) at {var} = {picks[i]:.6g}")
         return None
 
     # --- the estimate ----------------------------------------------------------------------------
@@ -513,7 +561,7 @@ class ClosedMotion:
                 for c in self.cyclic:
                     if c in got:
                         integral, _, _ = self.rate(c)
-                        ref[c] = mp.mpf(float(self.initial[c])) + integral.value_mp(float(ti))
+                        ref[c] = mp.mpf(self._start_value(c)) + integral.value_mp(float(ti))
                     if c + "_dot" in got:
                         num, den = self.rate_coefficients(c)
                         ref[c + "_dot"] = mp.polyval(num, u) / mp.polyval(den, u)
