@@ -197,8 +197,8 @@ def test_a_warm_process_neither_derives_nor_compiles(tmp_path):
     first = run_python("-c", code, env=env)
     second = run_python("-c", code, env=env)
     assert first.returncode == 0 and second.returncode == 0, first.stderr + second.stderr
-    assert first.stdout.split()[:2] == ["c", "['built']"]
-    assert second.stdout.split() == ["c", "['disk']", "False", "False"]
+    assert first.stdout.split()[:3] == ["c", "['built',", "'built']"]  # the right-hand side, the stepper
+    assert second.stdout.split() == ["c", "['disk',", "'disk']", "False", "False"]
 
 
 def test_an_unwritable_cache_folder_builds_privately(tmp_path, monkeypatch):
