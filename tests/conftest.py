@@ -71,6 +71,10 @@ LONGEST_GROUPS = ("catalog", "tests.test_s3_6_closed_form", "tests.test_heavy_to
                   "tests.test_s3_1_path_ordered", "tests.test_prefetch", "tests.test_doctests")
 
 
+#: node-id parts of the tests outside the catalog's group that derive the falling cat
+_DERIVES_THE_CAT = ("[falling_cat]", "[mechderive.systems.deformable")
+
+
 @pytest.hookimpl(tryfirst=True)  # before xdist's own hook, which reads the groups
 def pytest_collection_modifyitems(config, items):
     # ``--dist loadgroup`` with one group a file: a file's tests run in one worker, so what they derive (a
@@ -79,10 +83,13 @@ def pytest_collection_modifyitems(config, items):
     # not in both (measured: 225 → 160 s of derivation in all).  Every test that reads the catalog's
     # verdicts joins test_catalog's group, which checks each claim once (the derivation scripts then replay),
     # and so do the §3.7 tests: the falling cat's connection (~7 s) is derived once, for them and the claims.
+    # The tests elsewhere that derive the falling cat (its formats, its modules' doctests) join them too: the cat
+    # is the longest derivation (~7 s), and it was derived in both workers (measured with py-spy).
     group = {}
     for item in items:
         catalog = ("claims_checked_once" in getattr(item, "fixturenames", ())
-                   or item.module.__name__ in ("tests.test_catalog", "tests.test_s3_7_deformable"))
+                   or item.module.__name__ in ("tests.test_catalog", "tests.test_s3_7_deformable")
+                   or any(mark in item.nodeid for mark in _DERIVES_THE_CAT))
         group[item] = "catalog" if catalog else item.module.__name__
         item.add_marker(pytest.mark.xdist_group(group[item]))
     # xdist hands the groups out in collection order: the longest first, so that no long group starts
