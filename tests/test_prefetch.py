@@ -22,9 +22,13 @@ def _cold_run(tmp_path, name: str, **env: str) -> dict:
 
 
 @pytest.mark.skipif(not hasattr(os, "fork") or (os.cpu_count() or 1) < 2, reason="needs fork and two cores")
-def test_a_cold_start_on_two_cores_gives_the_one_core_answer(tmp_path):
+def test_a_cold_start_on_two_cores_gives_the_one_core_answer(tmp_path, capsys):
     two = _cold_run(tmp_path, "two")
-    one = _cold_run(tmp_path, "one", MECHDERIVE_PARALLEL="0")
+    # the one-core answer: this process's, derived here (or by this session's processes, on one core each)
+    from mechderive.cli import main
+
+    assert main(["run", "--json", "-o", str(tmp_path / "one.csv")]) == 0
+    one = json.loads(capsys.readouterr().out)
     from mechderive.systems.heavy_top.exact_extended import EXTENDED
 
     # b ∓ a in the half angle for the extended-precision setup (where longdouble is wider than a double), φ̇ and
@@ -33,7 +37,6 @@ def test_a_cold_start_on_two_cores_gives_the_one_core_answer(tmp_path):
         *(["heavy_top.passage_factors (parallel)"] if EXTENDED else []), "heavy_top.precession_fractions (parallel)",
         "heavy_top.spin_fractions (parallel)", "heavy_top.rates_near_poles (parallel)",
         "heavy_top.invariants (parallel)"]
-    assert not any(c.endswith("(parallel)") for c in one["compiled"])
     # the same functions, derived in another process: the same table to the last bit
     assert (tmp_path / "two.csv").read_bytes() == (tmp_path / "one.csv").read_bytes()
     assert two["error_estimate"] == one["error_estimate"]
@@ -60,3 +63,18 @@ def test_a_failing_child_leaves_the_work_to_the_parent(tmp_path, monkeypatch):
     func, _ = codecache.cached_lambdify(name, build)
     assert func(3.0) == [10.0]
     assert codecache.compile_log()[-1][:2] == (name, "compiled")  # built here: the child left no file
+
+
+def test_parallel_off_derives_in_this_process_alone(tmp_path, monkeypatch):
+    import sympy as sp
+
+    monkeypatch.setenv("MECHDERIVE_CACHE_DIR", str(tmp_path))
+    monkeypatch.delenv("MECHDERIVE_NO_DISK_CACHE", raising=False)
+    monkeypatch.setattr(os, "cpu_count", lambda: 2)
+    monkeypatch.setattr("threading.active_count", lambda: 1)
+    monkeypatch.setenv("MECHDERIVE_PARALLEL", "0")
+    x = sp.Symbol("x")
+    name = f"test.prefetch_off_{os.getpid()}"
+    assert not codecache.prefetch([(name, lambda: ([x], x + 1), "numpy")])  # no child forked
+    func, _ = codecache.cached_lambdify(name, lambda: ([x], x + 1))
+    assert func(1.0) == [2.0] and codecache.compile_log()[-1][:2] == (name, "compiled")
