@@ -93,6 +93,20 @@ def test_every_subcommand_parses_intermixed_options():
         assert exc.value.code == 2, name
 
 
+def test_a_command_line_builds_the_parser_of_its_own_subcommand_alone():
+    from mechderive.cli import COMMANDS
+
+    full = _subcommand_parsers(build_parser())
+    assert set(COMMANDS) == set(full)  # the table main dispatches on names every subcommand, no more
+    for name in COMMANDS:
+        alone = _subcommand_parsers(build_parser(name))
+        assert name in alone and set(alone) <= set(full)
+        # the same options, help and usage as in the full parser
+        assert alone[name].format_help() == full[name].format_help(), name
+    # run and scenes come from one module: building `run` does not build `derive`
+    assert set(_subcommand_parsers(build_parser("run"))) == {"run", "scenes"}
+
+
 @pytest.mark.parametrize("argv, expected", [
     (["derive", "heavy_top", "--format", "latex", "lagrangian", "f_u"],
      {"system": "heavy_top", "quantities": ["lagrangian", "f_u"], "format": "latex"}),

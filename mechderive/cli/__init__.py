@@ -108,7 +108,19 @@ def _columns() -> int:
         return 80
 
 
-def build_parser() -> argparse.ArgumentParser:
+#: each subcommand's name -> the module of this package that registers it (``run`` registers two)
+COMMANDS = {"run": "run", "scenes": "run", "verify": "verify", "derive": "derive", "check": "check",
+            "bench": "bench", "stress": "stress", "sweep": "sweep"}
+
+
+def build_parser(only: str | None = None) -> argparse.ArgumentParser:
+    """The command line's parser; with ``only`` (a name of :data:`COMMANDS`), just the subcommands its
+    module registers.
+
+    :func:`main` builds the one subcommand a command line names: importing the other modules and building
+    their parsers (~8 ms) was waste in every ``mechderive run``.  ``mechderive --help``, ``--version`` and
+    an unknown command get the full parser (the list of commands, argparse's "invalid choice" with them).
+    """
     parser = _Parser(
         prog="mechderive",
         description="Derive, verify and simulate the motion of rigid bodies.",
@@ -120,15 +132,11 @@ def build_parser() -> argparse.ArgumentParser:
 
     # Each subcommand module registers itself; imported here, not at package import, so that
     # `import mechderive.cli` stays light.
-    from . import bench, check, derive, run, stress, sweep, verify
+    import importlib
 
-    run.add_parsers(sub)  # run, scenes
-    verify.add_parser(sub)
-    derive.add_parser(sub)
-    check.add_parser(sub)
-    bench.add_parser(sub)
-    stress.add_parser(sub)
-    sweep.add_parser(sub)
+    for name in dict.fromkeys(COMMANDS.values()) if only is None else (COMMANDS[only],):
+        module = importlib.import_module(f".{name}", __name__)
+        (module.add_parsers if name == "run" else module.add_parser)(sub)  # run adds run and scenes
     return parser
 
 
@@ -247,8 +255,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     pipe the status is 141 instead.
     """
     try:
-        parser = build_parser()
-        args = parse_args(parser, sys.argv[1:] if argv is None else argv)
+        words = sys.argv[1:] if argv is None else list(argv)
+        parser = build_parser(words[0] if words and words[0] in COMMANDS else None)
+        args = parse_args(parser, words)
         if args.command is None:
             parser.print_help()
             status = 0

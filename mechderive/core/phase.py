@@ -53,7 +53,15 @@ class DD:
         >>> d = DD.scaled(mpmath.mpf("1e-310"))
         >>> d.exp, 0.5 <= abs(d.hi) < 1, DD.scaled(mpmath.mpf(3)).exp
         (-1029, True, 0)
+
+        A ``numpy.longdouble`` is split the same way without mpmath (its frexp and ldexp are exact).
         """
+        if isinstance(x, np.floating):
+            if x == 0 or 2.0**-500 <= abs(x) <= 2.0**500:
+                return cls.of(x)
+            y, e = np.frexp(x)
+            hi = float(y)
+            return cls(hi, float(y - type(y)(hi)), int(e))
         import mpmath
 
         if x == 0 or mpmath.mpf(2) ** -500 <= abs(x) <= mpmath.mpf(2) ** 500:

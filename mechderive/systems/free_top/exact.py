@@ -55,7 +55,6 @@ import functools
 from dataclasses import dataclass, field
 from typing import Any, Sequence
 
-import mpmath
 import numpy as np
 
 from ...core.phase import DD, mod_two_pi, reduce_phase_nearest
@@ -64,7 +63,6 @@ from ...errors import InvalidInputError, UnphysicalInertiaError
 from ...inertia.validate import check_principal_moments
 from ...kinematics.rotations import euler_angles_from_matrix, rotation_matrix
 from ...kinematics.so3 import expm_so3
-from . import _exact_setup as setup
 
 __all__ = ["FreeTopSolution", "exact_free_top"]
 
@@ -200,6 +198,16 @@ class FreeTopSolution:
 
     @functools.cached_property
     def _orient(self) -> _Orientation:
+        if "extended" in self._mp:  # set up in extended precision: the orientation too, where its errors allow
+            from .exact_extended import orientation
+
+            o = orientation(self)
+            if o is not None:
+                return o
+        import mpmath
+
+        from . import _exact_setup as setup
+
         with mpmath.workdps(setup.DPS):
             return _orientation_setup(self)
 
@@ -545,7 +553,8 @@ class FreeTopSolution:
         return (w_space @ self._S.T)[..., :2]
 
 
-def exact_free_top(moments: Any, omega0: Any, *, R0: Any = None, strict: bool = True) -> FreeTopSolution:
+def exact_free_top(moments: Any, omega0: Any, *, R0: Any = None, strict: bool = True,
+                   horizon: float | None = None) -> FreeTopSolution:
     """The exact motion of a free rigid body with principal moments ``moments``.
 
     Parameters
@@ -555,6 +564,9 @@ def exact_free_top(moments: Any, omega0: Any, *, R0: Any = None, strict: bool = 
     R0 : the chapter's R at t = 0 (default identity: body axes along the space axes).
     strict : ``False`` accepts moments that violate the triangle inequalities (no rigid body has
         them, e.g. (3, 3, 9)); positive, finite moments are required all the same.
+    horizon : the largest |t| (s) the motion will be evaluated at, if known: the constants are then set up
+        in extended precision where their measured errors over that span allow (:mod:`.exact_extended`,
+        no mpmath), else at 40 digits as without it.
 
     >>> sol = exact_free_top((1.0, 2.0, 3.0), (1.0, 0.5, 1.0))
     >>> sol.kind, round(sol.polhode_period, 6)
@@ -571,11 +583,25 @@ def exact_free_top(moments: Any, omega0: Any, *, R0: Any = None, strict: bool = 
     I = check_principal_moments(*as_finite_array(moments, "moments", shape=(3,)), strict=strict)
     w0 = as_finite_array(omega0, "omega0", shape=(3,))
     R0 = np.eye(3) if R0 is None else check_rotation_matrix(R0, "R0")
+    if horizon is not None:
+        from .exact_extended import setup as extended
+
+        sol = extended(I, w0, R0, float(horizon))
+        if sol is not None:
+            return sol
+    import mpmath
+
+    from . import _exact_setup as setup
+
     with mpmath.workdps(setup.DPS):
         return _setup(I, w0, R0)
 
 
 def _setup(I: np.ndarray, w0: np.ndarray, R0: np.ndarray) -> FreeTopSolution:
+    import mpmath
+
+    from . import _exact_setup as setup
+
     mp = mpmath.mpf
     two_T, L2, _ = setup.gaps(I, w0)
     L_norm = mpmath.sqrt(setup.mpf_of(L2))
@@ -649,8 +675,17 @@ def _t_max(rate) -> float:
 
 
 def _orientation_setup(sol: FreeTopSolution) -> _Orientation:
-    """The precession constants, the L frame and φ'0 (40 digits), for the first R(t) request."""
-    e: setup.Elliptic = sol._mp["constants"]
+    """The precession constants, the L frame and φ'0 (40 digits), for the first R(t) request (inside
+    ``mpmath.workdps``); a motion set up in extended precision gets its 40-digit constants here."""
+    import mpmath
+
+    from . import _exact_setup as setup
+
+    if "constants" not in sol._mp:  # the extended setup's orientation did not pass its checks
+        I, w0 = np.array(sol.moments), np.array(sol.omega0)
+        sol._mp["constants"] = setup.elliptic_constants(I, w0)
+        sol._mp["L"] = mpmath.sqrt(setup.mpf_of(setup.gaps(I, w0)[1]))
+    e = sol._mp["constants"]
     Lm = sol._mp["L"]
     c1, c2, n = setup.compiled_precession()(*e.I_rel, e.two_T, e.L2, Lm)
     n = n if e.m != 0 else mpmath.mpf(0)

@@ -143,7 +143,9 @@ def _exact(scene: "Scene", t: np.ndarray) -> Solved:
     scaled = units_of(scene)
     moments, w0, R0 = _setup(scene)
     try:
-        sol = exact_free_top(moments, w0, R0=R0, strict=scene.strict)
+        # the span is known: the constants in extended precision where that suffices over it (no mpmath)
+        sol = exact_free_top(moments, w0, R0=R0, strict=scene.strict,
+                             horizon=float(np.max(np.abs(t))) if t.size else 0.0)
     except InvalidInputError as exc:
         raise OutOfReach(f"scene keys [parameters], [initial].omega: {exc}") from exc
     if t[-1] > sol.t_max:
