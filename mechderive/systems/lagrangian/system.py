@@ -328,8 +328,9 @@ class LagrangianSystem(System):
             out.update({e: v for e, v in zip(expr_names, vals) if e in wanted})
         info = {
             "error_estimate": estimate,
-            "error_estimate_kind": ("absolute, in the outputs' units: the doubles against an evaluation of "
-                                    "the same closed form at 30 digits at up to 6 of the times (the last included)"),
+            "error_estimate_kind": getattr(motion, "estimate_kind", (
+                "absolute, in the outputs' units: the doubles against an evaluation of the same closed form at 30 "
+                "digits at up to 6 of the times (the last included)")),
             "closed_form": motion.describe(),
             "per_column_estimate": per_column,
             "cyclic_coordinates": list(eq.cyclic),
@@ -421,7 +422,7 @@ class LagrangianSystem(System):
         out = invariants_of(drifts, tuple(n for n in names if n != "period" and n not in reduced),
                             "the Lagrangian depends on t")
         # every closed-form summary from one pair of motions (the run's own, where it was the closed form)
-        closed_names = [n for n in names if n in reduced or n == "period" and self.reduction()[0] is not None]
+        closed_names = [n for n in names if n in reduced or n == "period" and self.has_reduction()]
         closed_out = self._closed_summaries(scene, drifts, closed_names, getattr(solved.solution, "motion", None)) \
             if closed_names else {}
         out.update({n: v for n, v in closed_out.items() if n != "period"})
@@ -441,7 +442,7 @@ class LagrangianSystem(System):
                     out["period"] = measured if closed[0] is None else _checked(closed, measured)
             else:
                 measured = period_of(np.asarray(traj.t), np.asarray(traj.y)[:, columns], errors)
-                if self.reduction()[0] is None:
+                if not self.has_reduction():
                     out["period"] = measured
                 else:
                     out["period"] = _checked(closed_out["period"], measured)
@@ -460,6 +461,20 @@ class LagrangianSystem(System):
             except (NoQuadrature, NoSubstitution, DerivationError) as exc:
                 self.__dict__[key] = (None, str(exc))
         return self.__dict__[key]
+
+    def has_reduction(self) -> bool:
+        """Whether a closed form may exist: the reduction in t, or an orbit along a cyclic coordinate (then t along it
+        inverts, :mod:`.timed`)."""
+        if self.reduction()[0] is not None:
+            return True
+        from ...core.quadrature import NoQuadrature
+        from ...errors import DerivationError
+
+        try:
+            cyclic = self.reduced_model().cyclic_coordinates
+        except (NoQuadrature, DerivationError):  # t not a gauge: no reduction at all (reduction() says why)
+            return False
+        return any(self.reduction(q.func.__name__)[0] is not None for q in cyclic)
 
     def reduced_model(self) -> Any:
         """The :class:`~mechderive.core.lagrangian.LagrangianModel` the closed form reduces: L itself, or, where L
