@@ -595,9 +595,10 @@ class LagrangianSystem(System):
         formulas, built on request (a system without a reduction lists them and says why when asked)."""
         names = ["u", "m", "kappa", "t", *self.equations.cyclic]
         # the formulas are the system's, not a start's: say which motion they describe
-        meanings = {"u": "u(χ) along the motion between two real roots of P (χ the amplitude); a start with no "
-                         "turning point, beside a complex pair or escaping to ∞ takes another form, which `run --json` "
-                         "reports under details.closed_form",
+        meanings = {"u": "u(χ) along the motion between two real roots of P (χ the amplitude); the other root "
+                         "configurations are closed_form_u_<configuration> (polynomial, sinh, cosh, double_root, "
+                         "cn_cubic, cn_quartic, cn_quartic_outside, tan), and `run --json` reports a start's own under "
+                         "details.closed_form",
                     "m": "the Jacobi parameter m, the roots' cross-ratio", "kappa": "the rate κ of the Jacobi argument",
                     "t": "t − t₀ = (F(χ|m) − F(χ₀|m))/κ"}
 
@@ -618,9 +619,29 @@ class LagrangianSystem(System):
                                       "for deg P ≤ 1, m, κ and t(χ) do not apply)")
             return found[name][part]
 
+        def configuration(config: str, part: int) -> Any:
+            from ...errors import DerivationError
+            from .configurations import CONFIGURATIONS, configuration_formulas
+
+            found, reason = self.reduction()
+            if found is None:
+                raise DerivationError(f"no closed form: {reason}")
+            if config not in CONFIGURATIONS[found.degree]:
+                where = ", ".join(str(d) for d, names in CONFIGURATIONS.items() if config in names)
+                raise DerivationError(f"closed_form_u_{config}: expected P of degree {where}, got degree "
+                                      f"{found.degree} ({found.name}); its configurations: "
+                                      + ", ".join(CONFIGURATIONS[found.degree]))
+            return configuration_formulas(found.variable, found.polynomial.LC(), found.degree)[config][part]
+
+        from .configurations import CONFIGURATIONS
+
+        configs = dict.fromkeys(c for names in CONFIGURATIONS.values() for c in names)
         return tuple(Derivation(f"closed_form_{n}", meanings.get(n, f"{n} − {n}₀ by partial fractions in u and "
                                                                      "Π(n; χ|m)"), "",
-                                lambda _, n=n: formula(n, 1), lhs=lambda n=n: formula(n, 0)) for n in names)
+                                lambda _, n=n: formula(n, 1), lhs=lambda n=n: formula(n, 0)) for n in names) + tuple(
+            Derivation(f"closed_form_u_{c}", f"u for the root configuration {c} of P, in its roots and leading "
+                       "coefficient ([u(χ), m, κ] for the elliptic ones; mechderive.systems.lagrangian.configurations)",
+                       "", lambda _, c=c: configuration(c, 1), lhs=lambda c=c: configuration(c, 0)) for c in configs)
 
     def _reduction(self) -> Any:
         """((d g(q)/dt)², P(g(q))): the substitution found and its polynomial, printed as one equation (the right
