@@ -146,9 +146,13 @@ def test_derive_prints_each_configuration_in_text_latex_and_python(tmp_path):
 
 def test_a_configuration_of_another_degree_is_refused_with_the_reason():
     from mechderive.errors import DerivationError
-    from mechderive.systems.lagrangian import from_lagrangian
+    from mechderive.scenes.schema import parse_scene
 
-    system = from_lagrangian("x_dot**2/2 + y_dot**2/(2*(1 + x**2)) - x**4/4 + x", ["x", "y"], [])  # as above: one reduction
+    # the cn scene of test_s3_6_closed_form_in_time (same group: its reduction derived once)
+    system = parse_scene({"system": "lagrangian", "coordinates": ["x", "y"], "parameters": {},
+                          "lagrangian": "x_dot**2/2 + y_dot**2/(2*(1 + x**2)) - x**4/4 + x",
+                          "initial": dict(x=0.3, y=0.0, x_dot=0.5, y_dot=0.8), "time": {"t_end": 1.0, "samples": 2},
+                          "output": {"quantities": ["x"]}}).model
     derivation = next(d for d in system.derivations() if d.name == "closed_form_u_sinh")
     with pytest.raises(DerivationError, match="expected P of degree 2, got degree 4"):
         derivation.build(None)

@@ -11,8 +11,8 @@ Euler–Lagrange worked on paper for the others), samples in the first period an
   samples) plus two ulp of the value: the estimate is honest.
 
 Kepler's ellipse and hyperbola and the precessing orbit have no elliptic closed form in t (u = 1/r gives a
-sextic): their orbit r(φ) along φ is compared at the reference's φ, and their motion in t — the orbit with t(φ)
-inverted (:mod:`mechderive.systems.lagrangian.timed`) — at the reference's t.
+sextic): their orbit r(φ) along φ is compared here at the reference's φ; their motion in t — the orbit with t(φ)
+inverted (:mod:`mechderive.systems.lagrangian.timed`) — at the reference's t in ``test_s3_6_closed_form_in_time.py``.
 """
 
 from __future__ import annotations
@@ -20,7 +20,6 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-import mpmath
 import numpy as np
 import pytest
 
@@ -85,34 +84,6 @@ def test_orbit_along_phi_against_30_digit_integration(case):
     if case["period"] is not None:
         advance = float(case["advance"]["phi"])
         assert abs(float(orbit.period) - advance) <= 1e-14 * advance
-
-
-@pytest.mark.parametrize("case", [c if c["name"] == "precessing_orbit" else pytest.param(c, marks=pytest.mark.slow)
-                                  for c in CASES if c["name"] in ORBITS], ids=lambda c: c["name"])
-def test_orbit_in_time_against_30_digit_integration(case):
-    """r, φ, ṙ, φ̇ at the reference's times (to 2024 periods: t ≈ 3e4 for the ellipse), from the orbit along φ with
-    t(φ) inverted: within 1e-12 of max(1, |q|) plus each value's rate times ulp(t) (the sample time's own rounding:
-    the reference's times are 30-digit numbers, the run's their doubles), and within the run's estimate."""
-    from mechderive.systems.lagrangian.closed import closed_motion
-
-    motion = closed_motion(_system(case), case["parameters"], case["initial"])
-    assert type(motion).__name__ == "TimedOrbit"
-    if case["period"] is not None:
-        assert abs(float(motion.period) - float(case["period"])) <= 1e-14 * float(case["period"])
-    t = np.array([float(s["t"]) for s in case["samples"]])
-    names = [*case["coordinates"], *(q + "_dot" for q in case["coordinates"])]
-    got = motion.columns(t, names)
-    estimate = motion.estimate(t, names)[1]
-    for i, sample in enumerate(case["samples"]):
-        rounding = abs(float(mpmath.mpf(sample["t"]) - mpmath.mpf(t[i])))
-        for name in names:
-            want = float({**sample["q"], **sample["q_dot"]}[name])
-            # a velocity's own rate is not an output: ṙ, φ̇ are held to the plain 1e-12 (r̈·ulp(t) ≤ 4e-12·ulp is far below)
-            slope = abs(got[name + "_dot"][i]) if not name.endswith("_dot") else 0.0
-            diff = abs(got[name][i] - want)
-            assert diff <= 1e-12 * max(1.0, abs(want)) + 2 * slope * rounding, (name, float(sample["t"]), diff)
-            assert diff <= 4 * estimate[name] + 2 * np.spacing(abs(want)) + 2 * slope * rounding, \
-                (name, diff, estimate[name])
 
 
 @pytest.mark.parametrize("case", [c for c in CASES if c["name"] not in ORBITS and c["advance"]
