@@ -293,3 +293,14 @@ def test_safeguarded_newton_converges_where_plain_newton_diverges():
         root = float(mpmath.tan(1))
     assert abs(result.s[0] - root) <= 2 * np.spacing(root)
     assert abs(result.residual[0]) <= 4 * np.spacing(1.0)  # the residual reported is the one at the returned s
+
+
+def test_circular_orbit_is_uniform_rotation():
+    """r = 1, φ̇ = 1 with GM = 1: the orbit along φ is steady (u a double root of P), t = φ/φ̇ exactly; r(t) = 1,
+    φ(t) = t to the rounding of t (measured: exact)."""
+    motion = _motion(dict(r=1.0, phi=0.0, r_dot=0.0, phi_dot=1.0))
+    assert motion.kind == "steady"
+    t = np.array([0.0, 0.5, 7.0, 1234.5])
+    got = motion.columns(t, NAMES)
+    assert np.all(np.abs(got["phi"] - t) <= 2 * np.spacing(t)) and np.all(np.abs(got["r"] - 1.0) <= 4e-16)
+    assert np.all(np.abs(got["phi_dot"] - 1.0) <= 4e-16) and np.all(np.abs(got["r_dot"]) <= 4e-16)

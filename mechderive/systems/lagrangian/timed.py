@@ -79,8 +79,8 @@ class TimedOrbit:
         self.sigma = float(np.sign(rate0))
         self._check_one_sign(integral)
         lo, hi = -np.inf, np.inf
-        if integral.singular_times is not None:
-            lo, hi = integral.singular_times
+        if getattr(integral, "singular_times", None) is not None:
+            lo, hi = getattr(integral, "singular_times", None)
         if self.motion.escape_times is not None:
             lo, hi = max(lo, self.motion.escape_times[0]), min(hi, self.motion.escape_times[1])
         #: the orbit's domain in s (open): a pole of dt/ds or an escape of u bounds it
@@ -121,7 +121,7 @@ class TimedOrbit:
                 if abs(mp.im(r)) > mp.mpf(10) ** -20 * (1 + abs(r)):
                     continue
                 x = mp.re(r)
-                if a <= x <= b and not (what == "vanishes" and integral.singular_times is not None):
+                if a <= x <= b and not (what == "vanishes" and getattr(integral, "singular_times", None) is not None):
                     raise OutOfReach(f"d{self.along}/dt {what} at u = {float(x):.12g} on the orbit (u in "
                                      f"[{float(a):.6g}, {float(b):.6g}]): {self.along} does not move monotonically, "
                                      f"t({self.along}) has no inverse")
