@@ -74,6 +74,13 @@ LONGEST_GROUPS = ("catalog", "tests.test_s3_6_closed_form", "tests.test_heavy_to
 #: node-id parts of the tests outside the catalog's group that derive the falling cat
 _DERIVES_THE_CAT = ("[falling_cat]", "[mechderive.systems.deformable")
 
+#: module -> the group it joins: files that derive the same systems (SymPy, ~1 s each) run in one worker
+SHARED_GROUPS = {
+    # Kepler's and the precessing orbit's reductions in t and along φ, the cn-form system's (test_central_force_...)
+    "tests.test_s3_6_closed_form_in_time": "tests.test_s3_6_closed_form",
+    "tests.test_s3_6_closed_form_printed": "tests.test_s3_6_closed_form",
+}
+
 
 @pytest.hookimpl(tryfirst=True)  # before xdist's own hook, which reads the groups
 def pytest_collection_modifyitems(config, items):
@@ -90,7 +97,7 @@ def pytest_collection_modifyitems(config, items):
         catalog = ("claims_checked_once" in getattr(item, "fixturenames", ())
                    or item.module.__name__ in ("tests.test_catalog", "tests.test_s3_7_deformable")
                    or any(mark in item.nodeid for mark in _DERIVES_THE_CAT))
-        group[item] = "catalog" if catalog else item.module.__name__
+        group[item] = "catalog" if catalog else SHARED_GROUPS.get(item.module.__name__, item.module.__name__)
         item.add_marker(pytest.mark.xdist_group(group[item]))
     # xdist hands the groups out in collection order: the longest first, so that no long group starts
     # last while the other worker idles (longest-processing-time-first; a stale order costs time, not results)

@@ -11,6 +11,8 @@ test_s3_6_heavy_top_exact.py).
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 import sympy as sp
@@ -992,11 +994,15 @@ def test_summaries_of_a_rotation_say_why_there_are_no_turning_points():
 def test_central_force_orbit_along_phi(lagrangian, parameters, initial):
     from mechderive.systems.lagrangian.closed import closed_orbit
 
-    scene = _scene(["r", "phi"], lagrangian, parameters, initial, t_end=3.0, samples=301, quantities=["r", "phi"])
+    scene = _scene(["r", "phi"], lagrangian, parameters, initial, t_end=3.0, samples=301, quantities=["r", "phi"],
+                   method="integrate")
     integrated = run_scene(scene)
-    # in t, u = 1/r gives a sextic: no elliptic closed form; auto integrates and says why
-    assert integrated.report["method"] == "integrate"
-    assert "degree ≤ 4" in integrated.report["note"]
+    # in t, u = 1/r gives a sextic: no elliptic closed form in t; auto solves the orbit along φ and inverts t(φ)
+    exact = run_scene(dataclasses.replace(scene, method="auto"))
+    assert exact.report["method"] == "exact" and exact.report["details"]["closed_form"]["along"] == "phi"
+    assert "degree ≤ 4" in exact.report["details"]["closed_form"]["in_t"]
+    for name in ("r", "phi"):  # against DOP853 (its own estimate ≤ rtol = 1e-12)
+        assert np.max(np.abs(exact.columns[name] - integrated.columns[name])) <= 1e-10
     orbit = closed_orbit(scene.model, "phi", scene.parameters, scene.initial)
     assert (orbit.found.name, orbit.found.degree) == ("u = 1/q", 2)
     phi = integrated.columns["phi"] - initial["phi"]

@@ -11,7 +11,8 @@ Euler–Lagrange worked on paper for the others), samples in the first period an
   samples) plus two ulp of the value: the estimate is honest.
 
 Kepler's ellipse and hyperbola and the precessing orbit have no elliptic closed form in t (u = 1/r gives a
-sextic): auto integrates them, and their orbit r(φ) along φ is the closed form compared, at the reference's φ.
+sextic): their orbit r(φ) along φ is compared here at the reference's φ; their motion in t — the orbit with t(φ)
+inverted (:mod:`mechderive.systems.lagrangian.timed`) — at the reference's t in ``test_s3_6_closed_form_in_time.py``.
 """
 
 from __future__ import annotations

@@ -533,18 +533,25 @@ class ClosedMotion:
     def estimate(self, t: np.ndarray, wanted: Sequence[str]) -> tuple[float, dict]:
         """The largest difference between the doubles and a 30-digit evaluation of the same formulas at up to 6
         of the times (the last included), over the requested coordinates; and each one's."""
+        t = np.asarray(t, dtype=float)
+        ts = t[golden_picks(len(t))]
+        got = self.columns(ts, wanted)
+        worst: dict = {}
+        for i, ref in enumerate(self.reference_values(ts, got)):
+            for name, value in ref.items():
+                diff = abs(float(got[name][i]) - float(value)) + 2.0**-52 * abs(float(value))
+                worst[name] = max(worst.get(name, 0.0), diff)
+        chosen = [worst[n] for n in wanted if n in worst]
+        return (max(chosen) if chosen else 0.0), worst
+
+    def reference_values(self, ts: np.ndarray, got: dict) -> list[dict]:
+        """For each time of ``ts``, {name: 30-digit value (mpmath)} of the columns in ``got`` (this motion's doubles
+        at ``ts``, which pick the branch of q the Newton steps refine): the Jacobi functions and Π at 30 digits."""
         mp = _mp()
         from ...solvers.quadrature_motion import REFERENCE_DPS as DPS
 
-        t = np.asarray(t, dtype=float)
-        # the last time and five by the golden ratio's multiples: equally spaced picks can all fall on whole
-        # periods, where a libration started at its fold is ~0 and its rounding invisible
-        golden = (np.arange(1, 6) * 0.6180339887498949) % 1.0
-        picks = np.unique(np.concatenate([(golden * (len(t) - 1)).astype(int), [len(t) - 1]]))
-        ts = t[picks]
-        got = self.columns(ts, wanted)
         mo = self.motion
-        worst: dict = {}
+        out = []
         with mp.workdps(DPS):
             for i, ti in enumerate(ts):
                 if getattr(mo, "elementary", False):  # polynomial or exponential in t: no Jacobi functions
@@ -565,12 +572,8 @@ class ClosedMotion:
                     if c + "_dot" in got:
                         num, den = self.rate_coefficients(c)
                         ref[c + "_dot"] = mp.polyval(num, u) / mp.polyval(den, u)
-                for name, value in ref.items():
-                    if name in got:
-                        diff = abs(float(got[name][i]) - float(value)) + 2.0**-52 * abs(float(value))
-                        worst[name] = max(worst.get(name, 0.0), diff)
-        chosen = [worst[n] for n in wanted if n in worst]
-        return (max(chosen) if chosen else 0.0), worst
+                out.append({name: value for name, value in ref.items() if name in got})
+        return out
 
     @functools.cached_property
     def _g_mp(self) -> tuple:
@@ -629,6 +632,14 @@ class ClosedMotion:
         return q, (mo.mp_u_dot(sn, cn, dn) if u_dot is None else u_dot) / dgl(q)
 
 
+def golden_picks(n: int) -> np.ndarray:
+    """The indices of up to 6 of n samples an estimate re-evaluates: the last and five by the golden ratio's multiples
+    (equally spaced picks can all fall on whole periods, where a libration started at its fold is ~0 and its rounding
+    invisible)."""
+    golden = (np.arange(1, 6) * 0.6180339887498949) % 1.0
+    return np.unique(np.concatenate([(golden * (n - 1)).astype(int), [n - 1]]))
+
+
 def closed_orbit(system: Any, along: str, parameters: dict, initial: dict) -> ClosedMotion:
     """The orbit q(c) along the cyclic coordinate ``along`` (Binet's u = 1/r for a central force, where the motion
     in t has no elliptic closed form): a :class:`ClosedMotion` whose :meth:`~ClosedMotion.columns` take c − c(0)
@@ -636,9 +647,16 @@ def closed_orbit(system: Any, along: str, parameters: dict, initial: dict) -> Cl
     return ClosedMotion(system, parameters, initial, along=along)
 
 
-def closed_motion(system: Any, parameters: dict, initial: dict, energy_shift: float = 0.0) -> ClosedMotion:
-    """The :class:`ClosedMotion` of ``system`` from this start (E moved by ``energy_shift`` for a sensitivity);
-    raises :class:`OutOfReach` with the reason where the recipe does not apply."""
+def closed_motion(system: Any, parameters: dict, initial: dict, energy_shift: float = 0.0) -> Any:
+    """The :class:`ClosedMotion` of ``system`` from this start (E moved by ``energy_shift`` for a sensitivity); where
+    the reduction in t has no closed form, the motion in t from an orbit along a cyclic coordinate
+    (:class:`~.timed.TimedOrbit`: Kepler's problem); raises :class:`OutOfReach` with the reasons where neither
+    applies."""
+    found, reason = system.reduction()
+    if found is None and system.has_reduction():
+        from .timed import timed_motion
+
+        return timed_motion(system, parameters, initial, energy_shift, in_t=reason)
     return ClosedMotion(system, parameters, initial, energy_shift)
 
 

@@ -340,8 +340,9 @@ class LagrangianSystem(System):
             out.update({e: v for e, v in zip(expr_names, vals) if e in wanted})
         info = {
             "error_estimate": estimate,
-            "error_estimate_kind": ("absolute, in the outputs' units: the doubles against an evaluation of "
-                                    "the same closed form at 30 digits at up to 6 of the times (the last included)"),
+            "error_estimate_kind": getattr(motion, "estimate_kind", (
+                "absolute, in the outputs' units: the doubles against an evaluation of the same closed form at 30 "
+                "digits at up to 6 of the times (the last included)")),
             "closed_form": motion.describe(),
             "per_column_estimate": per_column,
             "cyclic_coordinates": list(eq.cyclic),
@@ -440,7 +441,7 @@ class LagrangianSystem(System):
         out = invariants_of(drifts, tuple(n for n in names if n != "period" and n not in reduced),
                             "the Lagrangian depends on t")
         # every closed-form summary from one pair of motions (the run's own, where it was the closed form)
-        closed_names = [n for n in names if n in reduced or n == "period" and self.reduction()[0] is not None]
+        closed_names = [n for n in names if n in reduced or n == "period" and self.has_reduction()]
         closed_out = self._closed_summaries(scene, drifts, closed_names, getattr(solved.solution, "motion", None)) \
             if closed_names else {}
         out.update({n: v for n, v in closed_out.items() if n != "period"})
@@ -460,7 +461,7 @@ class LagrangianSystem(System):
                     out["period"] = measured if closed[0] is None else _checked(closed, measured)
             else:
                 measured = period_of(np.asarray(traj.t), np.asarray(traj.y)[:, columns], errors)
-                if self.reduction()[0] is None:
+                if not self.has_reduction():
                     out["period"] = measured
                 else:
                     out["period"] = _checked(closed_out["period"], measured)
@@ -479,6 +480,20 @@ class LagrangianSystem(System):
             except (NoQuadrature, NoSubstitution, DerivationError) as exc:
                 self.__dict__[key] = (None, str(exc))
         return self.__dict__[key]
+
+    def has_reduction(self) -> bool:
+        """Whether a closed form may exist: the reduction in t, or an orbit along a cyclic coordinate (then t along it
+        inverts, :mod:`.timed`)."""
+        if self.reduction()[0] is not None:
+            return True
+        from ...core.quadrature import NoQuadrature
+        from ...errors import DerivationError
+
+        try:
+            cyclic = self.reduced_model().cyclic_coordinates
+        except (NoQuadrature, DerivationError):  # t not a gauge: no reduction at all (reduction() says why)
+            return False
+        return any(self.reduction(q.func.__name__)[0] is not None for q in cyclic)
 
     def reduced_model(self) -> Any:
         """The :class:`~mechderive.core.lagrangian.LagrangianModel` the closed form reduces: L itself, or, where L
@@ -599,9 +614,10 @@ class LagrangianSystem(System):
         formulas, built on request (a system without a reduction lists them and says why when asked)."""
         names = ["u", "m", "kappa", "t", *self.equations.cyclic]
         # the formulas are the system's, not a start's: say which motion they describe
-        meanings = {"u": "u(χ) along the motion between two real roots of P (χ the amplitude); a start with no "
-                         "turning point, beside a complex pair or escaping to ∞ takes another form, which `run --json` "
-                         "reports under details.closed_form",
+        meanings = {"u": "u(χ) along the motion between two real roots of P (χ the amplitude); the other root "
+                         "configurations are closed_form_u_<configuration> (polynomial, sinh, cosh, double_root, "
+                         "cn_cubic, cn_quartic, cn_quartic_outside, tan), and `run --json` reports a start's own under "
+                         "details.closed_form",
                     "m": "the Jacobi parameter m, the roots' cross-ratio", "kappa": "the rate κ of the Jacobi argument",
                     "t": "t − t₀ = (F(χ|m) − F(χ₀|m))/κ"}
 
@@ -622,9 +638,29 @@ class LagrangianSystem(System):
                                       "for deg P ≤ 1, m, κ and t(χ) do not apply)")
             return found[name][part]
 
+        def configuration(config: str, part: int) -> Any:
+            from ...errors import DerivationError
+            from .configurations import CONFIGURATIONS, configuration_formulas
+
+            found, reason = self.reduction()
+            if found is None:
+                raise DerivationError(f"no closed form: {reason}")
+            if config not in CONFIGURATIONS[found.degree]:
+                where = ", ".join(str(d) for d, names in CONFIGURATIONS.items() if config in names)
+                raise DerivationError(f"closed_form_u_{config}: expected P of degree {where}, got degree "
+                                      f"{found.degree} ({found.name}); its configurations: "
+                                      + ", ".join(CONFIGURATIONS[found.degree]))
+            return configuration_formulas(found.variable, found.polynomial.LC(), found.degree)[config][part]
+
+        from .configurations import CONFIGURATIONS
+
+        configs = dict.fromkeys(c for names in CONFIGURATIONS.values() for c in names)
         return tuple(Derivation(f"closed_form_{n}", meanings.get(n, f"{n} − {n}₀ by partial fractions in u and "
                                                                      "Π(n; χ|m)"), "",
-                                lambda _, n=n: formula(n, 1), lhs=lambda n=n: formula(n, 0)) for n in names)
+                                lambda _, n=n: formula(n, 1), lhs=lambda n=n: formula(n, 0)) for n in names) + tuple(
+            Derivation(f"closed_form_u_{c}", f"u for the root configuration {c} of P, in its roots and leading "
+                       "coefficient ([u(χ), m, κ] for the elliptic ones; mechderive.systems.lagrangian.configurations)",
+                       "", lambda _, c=c: configuration(c, 1), lhs=lambda c=c: configuration(c, 0)) for c in configs)
 
     def _reduction(self) -> Any:
         """((d g(q)/dt)², P(g(q))): the substitution found and its polynomial, printed as one equation (the right
