@@ -18,7 +18,8 @@ import numpy as np
 
 from ..special._doubledouble import PI_HI, PI_LO, dd_add, two_prod
 
-__all__ = ["DD", "reduce_phase", "reduce_phase_nearest", "mod_two_pi"]
+__all__ = ["DD", "reduce_phase", "reduce_phase_nearest", "mod_two_pi", "EXTENDED", "EPS_EXTENDED", "EXTENDED_TO_DOUBLE",
+           "EXTENDED_SAFETY", "EXTENDED_TOLERANCE"]
 
 
 @dataclass(frozen=True)
@@ -145,3 +146,18 @@ def mod_two_pi(rate: DD | float, x: np.ndarray) -> np.ndarray:
     kl = kl + k * 2 * PI_LO
     rh, rl = dd_add(ph, pl, -kh, -kl)
     return rh + rl
+
+# --- the extended-precision setups (the heavy and free tops' exact_extended): their error accounting ------------
+
+#: whether numpy.longdouble is wider than a double here (x87 extended precision on x86-64)
+EXTENDED = bool(np.finfo(np.longdouble).eps < 1e-18)
+#: the longdouble's ε
+EPS_EXTENDED = float(np.finfo(np.longdouble).eps)
+#: ε_ext / ε_double: a constant computed in doubles and in longdouble by the same code differs by about the
+#: doubles' error; scaled by this ratio it estimates the extended value's
+EXTENDED_TO_DOUBLE = EPS_EXTENDED / float(np.finfo(np.float64).eps)
+#: the factor on that scaled difference (the two roundings are not proportional value by value)
+EXTENDED_SAFETY = 16.0
+#: the largest estimated error a constant may carry (relative; the phase in units of K, the angles
+#: accumulated over the span in rad): 1e-14, a hundredth of the 1e-12 the batched paths promise
+EXTENDED_TOLERANCE = 1e-14

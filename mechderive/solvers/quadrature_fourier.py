@@ -34,7 +34,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from .quadrature_motion import DPS, REFERENCE_DPS, NotElliptic, _mp, _split_mp
+from .quadrature_motion import DPS, REFERENCE_DPS, NotElliptic, _mp, _split_mp, rate_coefficients_mp
 
 __all__ = ["FourierRate", "fourier_rate_integral"]
 
@@ -182,12 +182,7 @@ def fourier_rate_integral(motion: Any, numerator: Sequence, denominator: Sequenc
 
     mp = _mp()
     with mp.workdps(DPS):
-        N = [mp.mpf(x) for x in numerator]
-        Dn = [mp.mpf(x) for x in denominator]
-        while len(N) > 1 and N[0] == 0:
-            N = N[1:]
-        while len(Dn) > 1 and Dn[0] == 0:
-            Dn = Dn[1:]
+        N, Dn = rate_coefficients_mp(numerator, denominator)
         escaping = motion.escape_times is not None
         if escaping and len(N) > len(Dn) and any(x != 0 for x in N):
             raise NotElliptic(f"expected a rate bounded as u → ∞ on a motion that reaches ∞ (deg N ≤ deg D), got deg N = "

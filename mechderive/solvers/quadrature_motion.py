@@ -96,6 +96,19 @@ def _mp():
     return mpmath
 
 
+
+def rate_coefficients_mp(numerator: Sequence, denominator: Sequence) -> tuple[list, list]:
+    """A rate N(u)/D(u)'s coefficients (highest first) as mpmath numbers at the working precision, leading
+    zeros dropped (a constant stays): call inside ``mp.workdps``."""
+    mp = _mp()
+    N = [mp.mpf(x) for x in numerator]
+    Dn = [mp.mpf(x) for x in denominator]
+    while len(N) > 1 and N[0] == 0:
+        N = N[1:]
+    while len(Dn) > 1 and Dn[0] == 0:
+        Dn = Dn[1:]
+    return N, Dn
+
 def _split_mp(x) -> tuple[float, float]:
     """x (mpf) as a double-double (hi, lo), the difference taken at the working precision (at mpmath's default
     53 bits it would be rounded away: a test over 1000 periods caught a phase error of n·ulp(4K))."""

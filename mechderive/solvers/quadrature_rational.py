@@ -50,7 +50,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from .quadrature_motion import DPS, REFERENCE_DPS, NotElliptic, _mp, _split_mp
+from .quadrature_motion import DPS, NotElliptic, _mp, _split_mp, rate_coefficients_mp
 
 __all__ = ["RationalRate", "rational_rate_integral", "rational_path"]
 
@@ -265,7 +265,6 @@ class RationalRate:
     def _g(self, t: np.ndarray) -> np.ndarray:
         """Re G(x(t)) (see the module docstring), secular parts from the double-double phase."""
         f = self._doubles()
-        out = np.zeros(t.shape)
         if self.path == "line":
             x = t.astype(complex)
             total = np.zeros(t.shape, complex)
@@ -401,12 +400,7 @@ def rational_rate_integral(motion: Any, numerator: Sequence, denominator: Sequen
     if path is None:
         raise NotElliptic("expected u a rational function of e^{κt}, e^{2iv} or t (m = 0 or 1, or an elementary form)")
     with mp.workdps(DPS):
-        N = [mp.mpf(x) for x in numerator]
-        Dn = [mp.mpf(x) for x in denominator]
-        while len(N) > 1 and N[0] == 0:
-            N = N[1:]
-        while len(Dn) > 1 and Dn[0] == 0:
-            Dn = Dn[1:]
+        N, Dn = rate_coefficients_mp(numerator, denominator)
         if Dn[0] == 0:
             raise NotElliptic("expected a rate with a nonzero denominator, got D ≡ 0")
         U, S = _u_of_x(motion, path)

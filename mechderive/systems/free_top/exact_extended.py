@@ -38,22 +38,12 @@ from typing import Any
 
 import numpy as np
 
-from ...core.phase import DD
+from ...core.phase import DD, EXTENDED, EPS_EXTENDED as _EPS_EXT, EXTENDED_SAFETY as SAFETY
+from ...core.phase import EXTENDED_TO_DOUBLE as _RATIO, EXTENDED_TOLERANCE as TOLERANCE
 from . import _exact_gaps as exact_gaps
 
 __all__ = ["setup", "orientation", "EXTENDED", "TOLERANCE", "SAFETY", "MIN_M1"]
 
-#: whether numpy.longdouble is wider than a double here (x87 extended precision on x86-64)
-EXTENDED = bool(np.finfo(np.longdouble).eps < 1e-18)
-_EPS_EXT = float(np.finfo(np.longdouble).eps)
-_EPS64 = float(np.finfo(np.float64).eps)
-#: ε_ext / ε_double: the doubles' measured error scaled to the extended values'
-_RATIO = _EPS_EXT / _EPS64
-#: the factor on that scaled difference (the two roundings are not proportional value by value)
-SAFETY = 16.0
-#: the largest estimated error a constant may carry here (relative; the phase in units of K, the angles in
-#: rad over the span): 1e-14, a hundredth of the 1e-12 the batched paths promise
-TOLERANCE = 1e-14
 #: 1 − m below this goes to 40 digits: the Jacobi functions' piecewise-separatrix regime (1 − m < 1e-34) and
 #: the decades before it, where K ~ ln(4/k') and the doubles' comparison says little about the extended values
 MIN_M1 = 1e-30
@@ -138,7 +128,7 @@ def _elliptic(Im: tuple, wr: tuple, G: tuple, dtype: type, decided: dict | None)
     S = (one if w[2] > 0 else -one) * np.sqrt(S2)
     lam = np.sqrt(lam2)
     Q = dtype(np.asarray(_compiled()["Q"](*I, P, S, lam)[0])[()])
-    c0, s0, d0 = w[0] / P, w[1] / Q, w[2] / S
+    c0, s0 = w[0] / P, w[1] / Q
     kc = np.sqrt(m1)
     K = dtype(np.asarray(elliprf(zero, m1, one))[()])
     if decided is None:

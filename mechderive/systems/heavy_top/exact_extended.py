@@ -38,21 +38,11 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from ...core.phase import DD
+from ...core.phase import DD, EXTENDED, EPS_EXTENDED as _EPS_EXT, EXTENDED_SAFETY as SAFETY
+from ...core.phase import EXTENDED_TO_DOUBLE as _RATIO, EXTENDED_TOLERANCE as TOLERANCE
 
 __all__ = ["setup", "angle_constants", "fraction_jobs", "gap_jobs", "EXTENDED", "TOLERANCE"]
 
-#: whether numpy.longdouble is wider than a double here (x87 extended precision on x86-64)
-EXTENDED = bool(np.finfo(np.longdouble).eps < 1e-18)
-_EPS_EXT = float(np.finfo(np.longdouble).eps)
-_EPS64 = float(np.finfo(np.float64).eps)
-#: ε_ext / ε_double: the doubles' measured error scaled to the extended values'
-_RATIO = _EPS_EXT / _EPS64
-#: the factor on that scaled difference (the two roundings are not proportional value by value)
-SAFETY = 16.0
-#: the largest estimated error a constant may carry here (relative; for the phase in units of K, for the
-#: angles accumulated over the span in rad): 1e-14, a hundredth of the batched path's promise of 1e-12
-TOLERANCE = 1e-14
 _PARAMS = ("I1", "I3", "M", "g", "l")
 _STATE = ("theta", "theta_dot", "phi_dot", "psi_dot")
 #: the batch's checks the point must pass: its period (with the roots' errors propagated), turning angles and

@@ -45,7 +45,7 @@ def configuration_formulas(u: Any, lead: Any, degree: int) -> dict:
     name = sp.Symbol(str(u))
     tau = sp.Symbol("t") - sp.Symbol("t_0")
     chi = sp.Symbol("chi", real=True)
-    cn, sn = sp.cos(chi), sp.sin(chi)
+    cn = sp.cos(chi)
     kappa_sym, k2 = sp.Symbol("kappa"), sp.Symbol("k") ** 2
     # the complex pair z_re ± i z_im (not α, β: those name the heavy top's constants (3.72) in generated code)
     alpha, beta, sigma, r = sp.symbols("z_re z_im sigma u_r", real=True)
