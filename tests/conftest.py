@@ -67,12 +67,13 @@ def claims_checked_once(monkeypatch):
 
 #: the groups that take longest (measured 2026-11-28, a minute to 10 s each), started first
 LONGEST_GROUPS = ("catalog", "tests.test_s3_6_closed_form", "tests.test_heavy_top_integrate",
-                  "tests.test_derive", "tests.test_stress", "tests.test_sweep", "tests.test_bench", "tests.test_s3_2_inertia",
+                  "tests.test_stress", "tests.test_sweep", "tests.test_bench", "tests.test_s3_2_inertia",
                   "tests.test_s3_1_path_ordered", "tests.test_prefetch", "tests.test_doctests")
 
 
-#: node-id parts of the tests outside the catalog's group that derive the falling cat
-_DERIVES_THE_CAT = ("[falling_cat]", "[mechderive.systems.deformable")
+#: node-id parts of the tests outside the catalog's group that derive the falling cat: test_derive's formats (its
+#: LaTeX and code tests loop over every system, the cat's included) and the deformable modules' doctests
+_DERIVES_THE_CAT = ("tests/test_derive.py::", "[mechderive.systems.deformable")
 
 #: module -> the group it joins: files that derive the same systems (SymPy, ~1 s each) run in one worker
 SHARED_GROUPS = {
@@ -90,7 +91,7 @@ def pytest_collection_modifyitems(config, items):
     # not in both (measured: 225 → 160 s of derivation in all).  Every test that reads the catalog's
     # verdicts joins test_catalog's group, which checks each claim once (the derivation scripts then replay),
     # and so do the §3.7 tests: the falling cat's connection (~7 s) is derived once, for them and the claims.
-    # The tests elsewhere that derive the falling cat (its formats, its modules' doctests) join them too: the cat
+    # The tests elsewhere that derive the falling cat (test_derive, its modules' doctests) join them too: the cat
     # is the longest derivation (~7 s), and it was derived in both workers (measured with py-spy).
     group = {}
     for item in items:
