@@ -341,10 +341,18 @@ class DeformableBody(SymbolicModel):
         """The same body with the representatives S(x) r̃_i (3.88); its Ω_A are derived anew.
 
         ``S`` must be a rotation matrix (SymPy, 3×3) of the shape coordinates and parameters;
-        SᵀS = 1 and det S = 1 are checked at random points with 30 digits.
+        SᵀS = 1 and det S = 1 are checked at random points with 30 digits.  The regauged body is kept
+        per S, like any derived quantity: asking again returns the same body and derives nothing more.
         """
         if not isinstance(S, sp.MatrixBase) or S.shape != (3, 3):
             raise ShapeError(f"expected S as a 3×3 SymPy Matrix, got {getattr(S, 'shape', type(S).__name__)}")
+        kept = self.__dict__.setdefault("_regauged_bodies", {})
+        key = sp.ImmutableMatrix(S)
+        if key not in kept:
+            kept[key] = self._regauged(S)
+        return kept[key]
+
+    def _regauged(self, S: sp.MatrixBase) -> "DeformableBody":
         syms = [*self.coordinates, *self.parameters]
         extra = S.free_symbols - set(syms)
         if extra:
