@@ -45,6 +45,16 @@ def run_python(*args: str, timeout: float = 300, env: dict | None = None) -> sub
                           timeout=timeout)
 
 
+def warm_run_report(code: str) -> dict:
+    """Run ``code`` twice in fresh processes, the first warming the disk cache; the JSON the second prints last."""
+    run_python("-c", code)
+    done = run_python("-c", code)
+    assert done.returncode == 0, done.stderr
+    import json
+
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
 from mechderive.catalog.registry import evaluate as _EVALUATE  # noqa: E402 - the unpatched one
 
 

@@ -5,7 +5,6 @@ warm ``mechderive run`` of a free-top scene that imports neither mpmath nor SymP
 from __future__ import annotations
 
 import dataclasses
-import json
 
 import numpy as np
 import pytest
@@ -14,7 +13,7 @@ from mechderive.core.phase import DD
 from mechderive.systems.free_top import exact_extended
 from mechderive.systems.free_top.exact import exact_free_top
 
-from .conftest import run_python
+from .conftest import warm_run_report
 
 pytestmark = pytest.mark.skipif(not exact_extended.EXTENDED, reason="numpy.longdouble is a double here")
 
@@ -137,9 +136,6 @@ def test_a_warm_run_of_a_free_top_scene_imports_no_mpmath():
             "report = json.loads(out.getvalue())\n"
             "print(json.dumps({m: m in sys.modules for m in ('mpmath', 'sympy', 'scipy')}\n"
             "                 | {'estimate': report['error_estimate']}))\n")
-    run_python("-c", code)  # warms the disk cache
-    done = run_python("-c", code)
-    assert done.returncode == 0, done.stderr
-    report = json.loads(done.stdout.strip().splitlines()[-1])
+    report = warm_run_report(code)
     assert not report["mpmath"] and not report["sympy"] and not report["scipy"], report
     assert 0 < report["estimate"] < 1e-9

@@ -4,7 +4,6 @@ the same motion as the 40-digit setup over a random sample of every class, the f
 
 from __future__ import annotations
 
-import json
 
 import numpy as np
 import pytest
@@ -12,7 +11,7 @@ import pytest
 from mechderive.systems.heavy_top import exact_extended
 from mechderive.systems.heavy_top.exact import exact_heavy_top
 
-from .conftest import run_python
+from .conftest import warm_run_report
 
 pytestmark = pytest.mark.skipif(not exact_extended.EXTENDED, reason="numpy.longdouble is a double here")
 
@@ -132,10 +131,7 @@ def test_a_warm_run_of_the_default_scene_imports_no_mpmath():
             "print(json.dumps({'mpmath': 'mpmath' in sys.modules, 'sympy': 'sympy' in sys.modules,\n"
             "                  'scipy': 'scipy' in sys.modules, 'solve': report['timings']['solve'],\n"
             "                  'estimate': report['error_estimate']}))\n")
-    run_python("-c", code)  # warms the disk cache
-    done = run_python("-c", code)
-    assert done.returncode == 0, done.stderr
-    report = json.loads(done.stdout.strip().splitlines()[-1])
+    report = warm_run_report(code)
     assert not report["mpmath"] and not report["sympy"] and not report["scipy"], report
     assert 0 < report["estimate"] < 1e-9
 

@@ -59,7 +59,7 @@ from ._doubledouble import PI_HI, PI_LO, two_prod, two_sum
 from ._parameter import as_output, check_periods, parameter
 from ._sncndn import reduced_sn_cn_dn
 
-__all__ = ["jacobi_sn_cn_dn", "jacobi_am"]
+__all__ = ["jacobi_sn_cn_dn", "jacobi_am", "shift_by_quarter_periods"]
 
 
 def jacobi_sn_cn_dn(u: Any, m: Any, *, m1: Any = None,
@@ -138,3 +138,19 @@ def jacobi_am(u: Any, m: Any, *, m1: Any = None, periods: Any = None) -> np.ndar
         s, e = two_sum(hi, result)
         result = s + (e + lo + 2.0 * n * PI_LO)
     return as_output(result)
+
+
+def shift_by_quarter_periods(q: int, sn: Any, cn: Any, dn: Any, kc: Any) -> tuple[Any, Any, Any]:
+    """(sn, cn, dn) at v + q·K from their values at v, with kc = √(1 − m) (DLMF 22.4.iii: sn(v + K) = cd v,
+    cn(v + K) = −k' sd v, dn(v + K) = k' nd v; period 4K).  Plain arithmetic: doubles, longdoubles, mpmath
+    numbers or arrays alike.
+
+    >>> shift_by_quarter_periods(2, 0.5, 0.8, 0.9, 0.6)
+    (-0.5, -0.8, 0.9)
+    """
+    q = q % 4
+    if q % 2 == 0:
+        sign = 1 if q == 0 else -1
+        return sign * sn, sign * cn, dn
+    sign = 1 if q == 1 else -1
+    return sign * cn / dn, -sign * kc * sn / dn, kc / dn

@@ -32,6 +32,7 @@ import numpy as np
 from ...core.codecache import cached_lambdify
 from ...core.phase import DD
 from ...errors import DerivationError
+from ...special.jacobi import shift_by_quarter_periods
 from ._exact_gaps import TINY_M1, gaps, is_steady, relabelling, signed_permutation  # noqa: F401 - re-exported
 from ._exact_gaps import build_gap_constants, build_precession, build_q
 
@@ -67,16 +68,6 @@ def mpf_of(x: Fraction) -> mpmath.mpf:
 def _F(s, c, m1):
     """F(φ|m) for |φ| ≤ π/2 from s = sin φ, c = cos φ ≥ 0: s R_F(c², c² + m1 s², 1) (DLMF 19.25.5)."""
     return s * mpmath.elliprf(c * c, c * c + m1 * s * s, 1)
-
-
-def _shift(q: int, sv, cv, dv, kc):
-    """(sn, cn, dn) at q·K + v from their values at v (DLMF 22.4.iii: sn(v + K) = cd v, ...)."""
-    q = q % 4
-    if q % 2 == 0:
-        sign = 1 if q == 0 else -1
-        return sign * sv, sign * cv, dv
-    sign = 1 if q == 1 else -1
-    return sign * cv / dv, -sign * kc * sv / dv, kc / dv
 
 
 @dataclass(frozen=True)
@@ -146,7 +137,7 @@ def elliptic_constants(I: np.ndarray, w: np.ndarray) -> Elliptic:
         sv, cv = sp_ / h, ca / h
         dv = mpmath.sqrt(cv * cv + m1 * sv * sv)
         v0 = _F(sv, cv, m1)
-        sn, cn, dn = _shift(q0, sv, cv, dv, kc)
+        sn, cn, dn = shift_by_quarter_periods(q0, sv, cv, dv, kc)
         recon = (cn, sn, dn)
         A0 = mpmath.atan2(s0, c0)
     # The ansatz must reproduce ω(0) component by component, and satisfy Euler's equations (3.33):

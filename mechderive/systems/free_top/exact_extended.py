@@ -100,20 +100,11 @@ def _in_range(*values: Any) -> bool:
     return all(x == 0 or 1 / _RANGE <= abs(float(x)) <= _RANGE for x in values)
 
 
-def _shift(q: int, sv, cv, dv, kc):
-    """(sn, cn, dn) at q·K + v from their values at v (DLMF 22.4.iii), as :func:`._exact_setup._shift`."""
-    q = q % 4
-    if q % 2 == 0:
-        sign = 1 if q == 0 else -1
-        return sign * sv, sign * cv, dv
-    sign = 1 if q == 1 else -1
-    return sign * cv / dv, -sign * kc * sv / dv, kc / dv
-
-
 def _elliptic(Im: tuple, wr: tuple, G: tuple, dtype: type, decided: dict | None) -> dict[str, Any]:
     """The constants of :func:`._exact_setup.elliptic_constants` in ``dtype``; ``decided``: the branches the
     extended run took (q0, the shift of v0), taken again by the doubles so that the two runs compare."""
     from ...special._carlson import elliprf
+    from ...special.jacobi import shift_by_quarter_periods
 
     one, zero = dtype(1), dtype(0)
     I = tuple(dtype(v) for v in Im)
@@ -144,7 +135,7 @@ def _elliptic(Im: tuple, wr: tuple, G: tuple, dtype: type, decided: dict | None)
     sv, cv = sp_ / h, ca / h
     dv = np.sqrt(cv * cv + m1 * sv * sv)
     v0 = sv * dtype(np.asarray(elliprf(cv * cv, cv * cv + m1 * sv * sv, one))[()])
-    sn, cn, dn = _shift(q0, sv, cv, dv, kc)
+    sn, cn, dn = shift_by_quarter_periods(q0, sv, cv, dv, kc)
     Ix, Iy, Iz = I
     step = (1 if v0 > 0 else -1) if decided is None and abs(v0) > K / 2 else (decided or {}).get("step", 0)
     out = dict(m=m, m1=m1, P=P, Q=Q, S=S, lam=lam, K=K, kc=kc, q0=q0 + step, v0=v0 - step * K, step=step)
