@@ -19,6 +19,8 @@ import mpmath
 import numpy as np
 import pytest
 
+from .test_s3_6_closed_form_rates import _elements  # the orbital elements by hand, GM = m = 1
+
 KEPLER = "m/2*(r_dot**2 + r**2*phi_dot**2) + k/r"
 ELLIPSE = dict(r=1.0, phi=0.0, r_dot=0.1, phi_dot=1.2)
 HYPERBOLA = dict(r=1.0, phi=0.0, r_dot=0.2, phi_dot=1.6)
@@ -39,17 +41,6 @@ def _motion(initial):
     from mechderive.systems.lagrangian.closed import closed_motion
 
     return closed_motion(_system(KEPLER, ["r", "phi"], dict(m=1.0, k=1.0), initial), dict(m=1.0, k=1.0), initial)
-
-
-def _elements(initial):
-    """(ℓ, E, e, f0) with GM = k/m = 1, by hand: ℓ = r²φ̇, E = (ṙ² + r²φ̇²)/2 − 1/r, e² = 1 + 2Eℓ², and the true anomaly
-    at the start from r = ℓ²/(1 + e cos f), ṙ = (e/ℓ) sin f."""
-    mp = mpmath.mp
-    r, rd, pd = (mp.mpf(initial[k]) for k in ("r", "r_dot", "phi_dot"))
-    ell = r * r * pd
-    E = (rd**2 + (r * pd) ** 2) / 2 - 1 / r
-    e = mp.sqrt(1 + 2 * E * ell**2)
-    return ell, E, e, mp.atan2(rd * ell / e, (ell**2 / r - 1) / e)
 
 
 def _kepler_ellipse(initial, times):
