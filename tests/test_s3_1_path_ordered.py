@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from mechderive.catalog.registry import all_claims, evaluate, perturb
+from mechderive.catalog.registry import all_claims, evaluate
 from mechderive.errors import InvalidInputError, NonFiniteValueError, NotARotationError, ShapeError
 from mechderive.kinematics.euler import angular_velocity_body, angular_velocity_space, rotation_matrix
 from mechderive.kinematics.magnus import gauss_nodes, magnus_exponent, magnus_exponent_from_nodes, magnus_step
@@ -308,13 +308,14 @@ def test_claim_status(claim, claims_checked_once):
     assert result.status == expected, result.detail
 
 
-@pytest.mark.parametrize("claim", CLAIMS, ids=[c.equation for c in CLAIMS])
+# The generic perturbation of each member of the passing form is test_catalog's
+# test_check_fails_when_a_member_is_perturbed; here, each claim's own hand-made wrong form.
+PERTURBED = [c for c in CLAIMS if c.perturbed is not None]
+
+
+@pytest.mark.parametrize("claim", PERTURBED, ids=[c.equation for c in PERTURBED])
 def test_perturbed_formula_fails(claim):
-    assert not claim.check(perturb(claim.printed())).passed
-    if claim.perturbed is not None:
-        assert not claim.check(claim.perturbed()).passed
-    if claim.corrected is not None:
-        assert not claim.check(perturb(claim.corrected())).passed
+    assert not claim.check(claim.perturbed()).passed
 
 
 def _claim(equation):
