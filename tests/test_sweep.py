@@ -256,28 +256,6 @@ def test_a_local_worker_killed_mid_sweep_loses_no_points(tmp_path):
     assert same(whole, result.table)
 
 
-def test_a_dask_worker_killed_mid_sweep_loses_no_points(tmp_path):
-    from dask.distributed import LocalCluster
-
-    sw = sweep_of(grid=SMALL, summary=["theta_min", "steady"], chunk=2)
-    whole = run_sweep(sw, tmp_path / "whole.npz", workers=1).table
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster:
-        nanny = next(iter(cluster.workers.values()))
-        killed = []
-
-        def kill_one(k):
-            if not killed:  # the first chunk is back: the others are queued or running on both workers
-                # as a machine that dies: its nanny does not start a new worker (which the cluster's close
-                # would wait for, 2-30 s on a loaded machine); the other worker must take over its chunks
-                nanny.close_gracefully()
-                os.kill(nanny.process.pid, signal.SIGKILL)
-                killed.append(nanny)
-
-        result = run_sweep(sw, tmp_path / "dask.npz", dask=cluster.scheduler_address, on_chunk=kill_one)
-    assert killed
-    assert same(whole, result.table)
-
-
 # --- the command ---------------------------------------------------------------------------------
 
 def test_the_sweep_command_writes_the_table_and_the_map(tmp_path):
@@ -389,22 +367,48 @@ def test_descriptive_quantities_of_a_nutating_top_are_batched_as_the_single_path
         assert table["notes"][i] == f"minimum_spin: {why['minimum_spin']}"
 
 
-def test_a_sweep_on_a_local_dask_cluster_interrupted_resumes_to_the_same_table(tmp_path):
+@pytest.fixture(scope="module")
+def dask_cluster():
+    """One two-worker LocalCluster for the resume and the kill tests, used by its address (``local:2`` itself is
+    run in the backend test): a cluster's start (two fresh worker processes) is most of each test's time."""
     from dask.distributed import LocalCluster
 
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster:
+        yield cluster
+
+
+def test_a_sweep_on_a_local_dask_cluster_interrupted_resumes_to_the_same_table(tmp_path, dask_cluster):
     sw = sweep_of(grid=SMALL, summary=["theta_min", "motion_class"], chunk=4)
     whole = run_sweep(sw, tmp_path / "whole.npz", workers=1).table
 
     def interrupt(k):
         raise KeyboardInterrupt  # Ctrl-C as the first chunk comes back
 
-    # one cluster for both runs, by its address (``local:2`` itself is run in the backend test): a cluster's
-    # start is most of this test's time
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster:
-        with pytest.raises(KeyboardInterrupt):
-            run_sweep(sw, tmp_path / "cut.npz", dask=cluster.scheduler_address, on_chunk=interrupt)
-        written = len(list((tmp_path / "cut.npz.parts").glob("chunk-*.npz")))
-        assert 1 <= written < sw.chunks
-        resumed = run_sweep(sw, tmp_path / "cut.npz", dask=cluster.scheduler_address, resume=True)
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(sw, tmp_path / "cut.npz", dask=dask_cluster.scheduler_address, on_chunk=interrupt)
+    written = len(list((tmp_path / "cut.npz.parts").glob("chunk-*.npz")))
+    assert 1 <= written < sw.chunks
+    resumed = run_sweep(sw, tmp_path / "cut.npz", dask=dask_cluster.scheduler_address, resume=True)
     assert resumed.report["resumed_chunks"] == written
     assert same(whole, resumed.table)
+
+
+def test_a_dask_worker_killed_mid_sweep_loses_no_points(tmp_path, dask_cluster):
+    # last in this file: the cluster it shares keeps one worker afterwards
+    assert len(dask_cluster.workers) == 2
+    sw = sweep_of(grid=SMALL, summary=["theta_min", "steady"], chunk=2)
+    whole = run_sweep(sw, tmp_path / "whole.npz", workers=1).table
+    nanny = next(iter(dask_cluster.workers.values()))
+    killed = []
+
+    def kill_one(k):
+        if not killed:  # the first chunk is back: the others are queued or running on both workers
+            # as a machine that dies: its nanny does not start a new worker (which the cluster's close
+            # would wait for, 2-30 s on a loaded machine); the other worker must take over its chunks
+            nanny.close_gracefully()
+            os.kill(nanny.process.pid, signal.SIGKILL)
+            killed.append(nanny)
+
+    result = run_sweep(sw, tmp_path / "dask.npz", dask=dask_cluster.scheduler_address, on_chunk=kill_one)
+    assert killed
+    assert same(whole, result.table)
