@@ -258,7 +258,7 @@ def test_a_local_worker_killed_mid_sweep_loses_no_points(tmp_path):
 
 # --- the command ---------------------------------------------------------------------------------
 
-def test_the_sweep_command_writes_the_table_and_the_map(tmp_path):
+def test_the_sweep_command_writes_the_table_and_the_map(tmp_path, capsys):
     path = tmp_path / "top.toml"
     path.write_text("""system = "heavy_top"
 [parameters]
@@ -283,9 +283,10 @@ summary = ["motion_class", "nutation_period", "error_estimate"]
     header = (tmp_path / "m.csv").read_text(encoding="utf-8").splitlines()[0]
     assert header.startswith("theta [rad],psi_dot [rad/s],motion_class,")
     assert (tmp_path / "m.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    bad = subprocess.run([sys.executable, "-m", "mechderive", "sweep", str(path), "-o", str(tmp_path / "m.txt")],
-                         capture_output=True, text=True)
-    assert bad.returncode == 2 and bad.stderr.startswith("mechderive: error: sweep output")
+    from mechderive.cli import main  # the refusal in-process: a second fresh process costs a second
+
+    assert main(["sweep", str(path), "-o", str(tmp_path / "m.txt")]) == 2
+    assert capsys.readouterr().err.startswith("mechderive: error: sweep output")
 
 
 def test_magnitude_bounds_the_rounding_of_a_cancelling_expression():
