@@ -302,9 +302,11 @@ class LagrangianSystem(System):
         except (ArithmeticError, ValueError) as exc:  # the 30-digit reference itself failed (a 0 or ∞ there)
             raise OutOfReach(f"the closed form's 30-digit reference could not be evaluated on this motion "
                              f"({type(exc).__name__}: {exc or 'no detail'}): its error is not measured") from None
-        # never below the rounding of each column's own size (the sampled times may all sit where it is small)
-        for name in per_column:
-            per_column[name] = max(per_column[name], 4 * 2.0**-52 * float(np.max(np.abs(cols[name]))))
+        # never below the rounding of each column's own size (the sampled times may all sit where it is small) —
+        # unless the motion bounds every sample itself (its bounds hold each sample's own rounding)
+        if not getattr(motion, "bounds_every_sample", False):
+            for name in per_column:
+                per_column[name] = max(per_column[name], 4 * 2.0**-52 * float(np.max(np.abs(cols[name]))))
         estimate = max([per_column[n] for n in per_column if n in wanted] + [estimate])
         names = [*d.coordinates, *(q + "_dot" for q in d.coordinates)]
         # a cyclic angle nobody asked for stays at its start: the invariants do not depend on it
