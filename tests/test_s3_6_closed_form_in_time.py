@@ -152,8 +152,9 @@ def test_kepler_hyperbola_in_time_is_the_hyperbolic_keplers_equation():
 
 
 def test_kepler_scene_auto_runs_exact_and_says_why():
-    """A scene with method "auto": exact, the report naming the orbit along φ, why t was not reducible, the
-    inversion; the summaries from the closed form (period = 2π a^{3/2}, r_min = a(1 − e), φ per period = 2π)."""
+    """A scene with method "auto": exact, the report's note saying so and why (through the orbit along φ: no
+    closed form in t, u = 1/r giving degree 6), its details the orbit, why t was not reducible, the inversion; the
+    summaries from the closed form (period = 2π a^{3/2}, r_min = a(1 − e), φ per period = 2π)."""
     from mechderive.scenes.planner import run_scene
     from mechderive.scenes.schema import parse_scene
 
@@ -165,7 +166,11 @@ def test_kepler_scene_auto_runs_exact_and_says_why():
 
     result = run_scene(scene("auto"))
     report = result.report
-    assert report["method"] == "exact" and report["note"] is None and report["rtol_met"]
+    assert report["method"] == "exact" and report["rtol_met"]
+    note = report["note"]
+    assert note.startswith("exact in t through the orbit along phi: r(phi) in closed form (u = 1/q"), note
+    assert "the reduction in t has no closed form" in note and "u = 1/q: degree 6" in note, note
+    assert "note" not in report["details"]  # moved to the report's note, not repeated
     form = report["details"]["closed_form"]
     assert form["along"] == "phi" and "degree 6" in form["in_t"] and "bracketed Newton" in form["solved_as"]
     assert form["inversion"]["samples"] == 201 and form["inversion"]["unconverged"] == 0
@@ -178,7 +183,7 @@ def test_kepler_scene_auto_runs_exact_and_says_why():
         # each within its own estimate (the estimate the E-rounding sensitivity, measured 2e-13 for the period)
         assert abs(got - float(value)) <= max(4 * error, 2 * np.spacing(float(value))), (name, got, error)
     exact = run_scene(scene("exact"))
-    assert exact.report["method"] == "exact"
+    assert exact.report["method"] == "exact" and exact.report["note"] == note
     assert np.array_equal(exact.columns["phi"], result.columns["phi"])
 
 

@@ -346,6 +346,7 @@ class LagrangianSystem(System):
                 "absolute, in the outputs' units: the doubles against an evaluation of the same closed form at 30 "
                 "digits at up to 6 of the times (the last included)")),
             "closed_form": motion.describe(),
+            **({"note": motion.note} if getattr(motion, "note", None) else {}),
             "per_column_estimate": per_column,
             "cyclic_coordinates": list(eq.cyclic),
             "energy_conserved": True,

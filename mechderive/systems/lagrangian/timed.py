@@ -468,6 +468,16 @@ class TimedOrbit:
             out["inversion"] = dict(self.last_inversion)
         return out
 
+    @property
+    def note(self) -> str:
+        """The method and why, for the run's report (as ``auto`` says why it integrates): exact in t through the orbit
+        along c, because the reduction in t has no closed form."""
+        orbit = self.orbit.describe()
+        c, r = self.along, self.remaining
+        return (f"exact in t through the orbit along {c}: {r}({c}) in closed form ({orbit['substitution']}, "
+                f"(du/d{c})² of degree {orbit['degree']}) and t({c}) = ∫ d{c}/{c}_dot, inverted for {c}(t) by Newton "
+                f"— the reduction in t has no closed form ({self.in_t})")
+
     def summary(self, name: str) -> float:
         """``<q>_min``, ``<q>_max`` (the orbit's turning points: the same in t), ``<c>_per_period`` (the orbit's period
         in s for c itself; the orbit's advance of another cyclic coordinate)."""
