@@ -308,3 +308,24 @@ def test_circular_orbit_is_uniform_rotation():
     got = motion.columns(t, NAMES)
     assert np.all(np.abs(got["phi"] - t) <= 2 * np.spacing(t)) and np.all(np.abs(got["r"] - 1.0) <= 4e-16)
     assert np.all(np.abs(got["phi_dot"] - 1.0) <= 4e-16) and np.all(np.abs(got["r_dot"]) <= 4e-16)
+
+
+def test_cyclic_rates_without_a_reduction_in_t_give_the_reason():
+    """system.cyclic_rates() (ċ = N(u)/D(u) per cyclic coordinate, or the reason): for Kepler's problem, which has no
+    reduction in t, φ's entry is that reason (it raised AttributeError: the rates were asked of a missing
+    substitution); for the spherical pendulum, reduced by u = cos θ, φ̇ = p_φ/(m l²(1 − u²)) by hand; where L depends on
+    t other than through a gauge (no reduced model at all), the cyclic coordinate y of L itself, with that reason."""
+    kepler = _system(KEPLER, ["r", "phi"], dict(m=1.0, k=1.0), ELLIPSE)
+    rates = kepler.cyclic_rates()
+    assert set(rates) == {"phi"} and rates["phi"].startswith("no reduction in t: ") and "degree 6" in rates["phi"]
+    pendulum = _system("m*l**2/2*(theta_dot**2 + sin(theta)**2*phi_dot**2) + m*g*l*cos(theta)", ["theta", "phi"],
+                       dict(m=1.0, l=1.0, g=9.81), dict(theta=1.0, phi=0.0, theta_dot=0.0, phi_dot=2.0))
+    N, D = pendulum.cyclic_rates()["phi"]
+    rate = N.as_expr() / D.as_expr()
+    # at u = 0.3, m = 2, l = 1.5, p_φ = 0.7 (symbols matched by name: the reduction's carry assumptions)
+    values = {"m": 2.0, "l": 1.5, "p_phi": 0.7, str(N.gens[0]): 0.3}
+    got = float(rate.subs({s: values[s.name] for s in rate.free_symbols}))
+    assert got == pytest.approx(0.7 / (2.0 * 1.5**2 * (1 - 0.3**2)), rel=1e-15)
+    driven = _system("x_dot**2/2 + y_dot**2/2 - t*x**2", ["x", "y"], {}, dict(x=0.1, y=0.0, x_dot=0.0, y_dot=1.0))
+    assert driven.cyclic_rates() == {"y": "no reduction in t: expected L − dG/dt free of t, got -t*x**2 + x_dot**2/2 "
+                                          "+ y_dot**2/2 (a time dependence that is not a gauge)"}

@@ -515,11 +515,25 @@ class LagrangianSystem(System):
         return self.__dict__["_reduced_model"]
 
     def cyclic_rates(self) -> dict:
-        """{cyclic coordinate: (N, D) or the reason}: ċ = N(u)/D(u) (:func:`mechderive.core.quadrature.cyclic_rates`)."""
+        """{cyclic coordinate: (N, D) or the reason}: ċ = N(u)/D(u) (:func:`mechderive.core.quadrature.cyclic_rates`),
+        u the substitution of the reduction in t.  Where that reduction has none (Kepler's problem: u = 1/r gives
+        degree 6; L depending on t other than through a gauge), every cyclic coordinate's entry is the reason,
+        ``"no reduction in t: …"`` — its rate is then no function of a u with u̇² = P(u) (an orbit along a cyclic
+        coordinate has its own rates, in that coordinate)."""
         if "_rates" not in self.__dict__:
-            from ...core.quadrature import cyclic_rates
+            from ...core.quadrature import NoQuadrature, cyclic_rates
+            from ...errors import DerivationError
 
-            self.__dict__["_rates"] = cyclic_rates(self.reduced_model(), self.reduction()[0])
+            found, reason = self.reduction()
+            if found is None:
+                try:
+                    model = self.reduced_model()
+                except (NoQuadrature, DerivationError):  # t no gauge: the cyclic coordinates of L itself
+                    model = self.equations.lagrangian_model
+                rates = {c.func.__name__: f"no reduction in t: {reason}" for c in model.cyclic_coordinates}
+            else:
+                rates = cyclic_rates(self.reduced_model(), found)
+            self.__dict__["_rates"] = rates
         return self.__dict__["_rates"]
 
     def _closed_summaries(self, scene: "Scene", drifts: dict, names: list[str], base: Any = None) -> dict:
