@@ -474,7 +474,8 @@ class TimedOrbit:
         along c, because the reduction in t has no closed form."""
         orbit = self.orbit.describe()
         c, r = self.along, self.remaining
-        return (f"exact in t through the orbit along {c}: {r}({c}) in closed form ({orbit['substitution']}, "
+        along = " and ".join(f"{q}({c})" for q in (r, *self.others))
+        return (f"exact in t through the orbit along {c}: {along} in closed form ({orbit['substitution']}, "
                 f"(du/d{c})² of degree {orbit['degree']}) and t({c}) = ∫ d{c}/{c}_dot, inverted for {c}(t) by Newton "
                 f"— the reduction in t has no closed form ({self.in_t})")
 
