@@ -34,8 +34,11 @@ for a pole on the path itself.
 On the circle the motion is periodic (u has period π in v): G less its secular part Σ c_{ρ,1}·iγφ (over ρ = 0
 and the poles inside the unit circle, whose L_ρ carry log x) is a function of x alone, so the advance over one period
 of u is that secular rate times π — 2πi times the residues of F inside the circle (:attr:`RationalRate.advance`).
-The secular part is evaluated from φ in double-double and the rest from x of the phase reduced by π, so long times
-keep their digits (Kepler's t(φ) after 137 orbits: 4e-16 of t).
+The secular part is evaluated from φ in double-double (its rate, too, a double-double) and the rest from x of the
+phase reduced by π, so long times keep their digits (Kepler's t(φ) after 137 orbits: 4e-16 of t);
+:meth:`RationalRate.minus` gives the integral less a target without the integral's own final rounding (t(φ) − t
+near a root, to ~1e-3 ulp of t after 1000 orbits), and :meth:`RationalRate.rounding` a first-order bound of the
+doubles' rounding at each time (the terms' sizes, and their sensitivity to x's and x − ρ's rounding).
 
 A real pole of R that the motion reaches (a root ρ on the path: the circle, the positive ray, the real line) makes
 the integral diverge there; the integral exists between the crossings around τ = 0 (:attr:`RationalRate.singular_times`)
