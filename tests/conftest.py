@@ -89,6 +89,7 @@ _DERIVES_THE_CAT = ("tests/test_derive.py::", "[mechderive.systems.deformable")
 SHARED_GROUPS = {
     # Kepler's and the precessing orbit's reductions in t and along φ, the cn-form system's (test_central_force_...)
     "tests.test_s3_6_closed_form_in_time": "tests.test_s3_6_closed_form",
+    "tests.test_s3_6_closed_form_in_time_bounds": "tests.test_s3_6_closed_form",
     "tests.test_s3_6_closed_form_printed": "tests.test_s3_6_closed_form",
 }
 

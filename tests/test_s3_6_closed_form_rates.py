@@ -123,6 +123,53 @@ def test_kepler_ellipse_time_along_phi_is_keplers_equation_over_a_hundred_orbits
     assert abs(orbit.summary("t_per_period") - float(period)) <= 2e-15 * float(period)
 
 
+def test_kepler_time_minus_a_target_keeps_its_digits_after_a_thousand_orbits():
+    """t(φ) − t, as the inversion of t(φ) forms it (RationalRate.minus), against Kepler's equation at 30 digits after
+    1000 orbits (t ≈ 15400, ulp 1.8e-12), t the double nearest t(φ): within the integral's own rounding bound
+    (first-order, measured ≤ 0.27 of it), which is below 1/16 ulp of t — the secular part in double-double, the
+    target taken from it exactly.  The value alone is t rounded (to half an ulp), as before."""
+    initial = dict(r=1.0, phi=0.0, r_dot=0.1, phi_dot=1.2)
+    integral = _orbit(initial).rate("t")[0]
+    phi = 2 * np.pi * np.array([1000.0, 1000.13, 1000.5, 1000.87]) + 0.3
+    with mpmath.workdps(30):
+        ell, E, e, f0 = _elements(initial)
+        a = -1 / (2 * E)
+
+        def mean_anomaly(f):
+            turns = mpmath.nint(f / (2 * mpmath.pi))
+            ecc = 2 * mpmath.atan(mpmath.sqrt((1 - e) / (1 + e)) * mpmath.tan(f / 2)) + 2 * mpmath.pi * turns
+            return ecc - e * mpmath.sin(ecc)
+
+        exact = [(mean_anomaly(f0 + mpmath.mpf(float(p))) - mean_anomaly(f0)) * a**1.5 for p in phi]
+        target = np.array([float(x) for x in exact])
+        got = integral.minus(phi, target)
+        error = np.array([float(abs(mpmath.mpf(float(g)) - (x - mpmath.mpf(float(y))))) for g, x, y in
+                          zip(got, exact, target)])
+    bound = integral.rounding(phi)
+    assert np.all(error <= bound), (error, bound)
+    assert np.all(bound <= np.spacing(target) / 16), bound / np.spacing(target)
+    value = integral(phi)
+    assert np.all(np.abs(value - target) <= 0.5 * np.spacing(target))
+
+
+def test_reference_radius_is_refined_to_30_digits_far_along_the_asymptote():
+    """At r ≈ 3e12 on a hyperbola along φ (u = 1/r ≈ 3e-13, the doubles' r off by 1e-3 relative from u's rounding) the
+    30-digit reference r = 1/u of ClosedMotion.reference_values, Newton from the double r, reaches 1/u to 25 digits
+    (two fixed steps left 1e-12, and the estimate took that for the doubles' error of ṙ)."""
+    initial = dict(r=1.0, phi=-0.302, r_dot=-0.274, phi_dot=3.8586)
+    orbit = _orbit(initial)
+    lo, hi = orbit.rate("t")[0].singular_times
+    s = np.array([hi * (1 - 2.0**-40)])
+    got = orbit.columns(s, ["r", "r_dot"])
+    ref = orbit.reference_values(s, got)[0]
+    with mpmath.workdps(30):
+        v = orbit.motion.kappa * mpmath.mpf(float(s[0])) + orbit.motion.v_start
+        sn, cn, dn = (mpmath.ellipfun(f, v, m=orbit.motion.m) for f in ("sn", "cn", "dn"))
+        u = orbit.motion.mp_u(sn, cn, dn)
+        assert abs(ref["r"] * u - 1) <= mpmath.mpf(10) ** -25
+        assert ref["r"] > 1e11 and abs(float(got["r"][0]) / float(ref["r"]) - 1) > 1e-9  # the doubles' r is off
+
+
 def test_kepler_hyperbola_time_along_phi_is_the_hyperbolic_keplers_equation():
     """t(φ) of the hyperbola against M = e sinh H − H, tanh(H/2) = √((e − 1)/(e + 1)) tan(f/2), up to 0.999 of the
     way to the asymptote on both sides; at the asymptote dt/dφ = 1/(ℓu²) is infinite (u = 1/r = 0): refused there."""

@@ -191,6 +191,10 @@ def run_scene(scene: Scene) -> RunResult:
     solve_derive_s = derivation_seconds() - seconds0
     solve_compile_s = sum(s for _, _, s in compiled_since())
     cols, info, solution = dict(solved.columns), dict(solved.info), solved.solution
+    # the solver's own word on the method and why (Kepler's problem: exact in t through its orbit along φ) leads
+    method_note = info.pop("note", None)
+    if method_note:
+        note = method_note + ("; " + note if note else "")
     if start_at_zero:  # the launch at t = 0 was solved only to start from it
         cols = {k: v[1:] for k, v in cols.items()}
         solved = Solved(cols, info, solution)

@@ -9,7 +9,11 @@ near a flat or steep stretch of T cannot leave it; bisection halves it, so every
 
 A target stops when the step is at most a few ulp of s (Newton converges quadratically: the next step would be below
 the rounding of s), when the bracket is that narrow, or when |T(s) − t| is within a few ulp of t or the caller's
-rounding floor of T (no double s does better: T itself is evaluated to about that).  Near convergence T's rounding makes the last steps noisy, so each
+rounding floor of T (no double s does better: T itself is evaluated to about that).  A caller that can form T(s) − t
+without T's own rounding (``differences=True``: a large T whose secular part is exact in double-double) gives that
+difference instead of T, and the ulp of t is no floor: the iteration can then go to the double s nearest the root
+(``step_ulps=0``: a target stops when Newton's next point is s itself, or its bracket is one ulp wide — a step to a
+neighbour is taken and evaluated, not assumed).  Near convergence T's rounding makes the last steps noisy, so each
 target keeps the s with the smallest |T(s) − t| ever evaluated, and that residual is returned with it: the caller
 turns it into the error of s (residual × ds/dt), measured, not assumed.
 """
@@ -17,7 +21,7 @@ turns it into the error of s (residual × ds/dt), measured, not assumed.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable
+from typing import Any, Callable
 
 import numpy as np
 
@@ -41,13 +45,15 @@ class MonotoneInverse:
     converged: np.ndarray
 
 
-def invert_monotone(function: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]], targets: np.ndarray,
-                    lo: np.ndarray, hi: np.ndarray, guess: np.ndarray, *, increasing: bool, noise: float = 0.0,
-                    max_iterations: int = 120) -> MonotoneInverse:
+def invert_monotone(function: Callable[..., tuple[np.ndarray, np.ndarray]], targets: np.ndarray,
+                    lo: np.ndarray, hi: np.ndarray, guess: np.ndarray, *, increasing: bool, noise: Any = 0.0,
+                    max_iterations: int = 120, differences: bool = False, step_ulps: float = 4.0) -> MonotoneInverse:
     """Solve T(s) = t for each target (see the module docstring).  ``function(s)`` returns (T(s), T'(s)) for an
-    array s; ``lo`` < ``hi`` bracket each root; ``guess`` starts the iteration (clipped into the bracket); ``noise``:
-    the absolute rounding of T's evaluation where it exceeds ulp(t) (T a difference of terms larger than t near t = 0),
-    a residual below which no step is trusted.
+    array s — with ``differences``, ``function(s, t)`` returns (T(s) − t, T'(s)) for the targets t of those s;
+    ``lo`` < ``hi`` bracket each root; ``guess`` starts the iteration (clipped into the bracket); ``noise``: the
+    absolute rounding of T's evaluation where it exceeds ulp(t) (T a difference of terms larger than t near t = 0),
+    a residual below which no step is trusted (a number, or one per target); ``step_ulps``: the Newton step, in ulp
+    of s, at or below which a target stops (0: only where the next point is s itself).
 
     >>> r = invert_monotone(lambda s: (s**3 + s, 3 * s**2 + 1), np.array([2.0, -10.0]), np.array([-3.0, -3.0]),
     ...                     np.array([3.0, 3.0]), np.array([0.0, 0.0]), increasing=True)
@@ -55,6 +61,8 @@ def invert_monotone(function: Callable[[np.ndarray], tuple[np.ndarray, np.ndarra
     ([1.0, -2.0], True)
     """
     t = np.asarray(targets, dtype=float)
+    noise = np.broadcast_to(np.asarray(noise, dtype=float), t.shape)
+    floor_ulps = 0.0 if differences else ULPS
     lo = np.array(lo, dtype=float, copy=True)
     hi = np.array(hi, dtype=float, copy=True)
     s = np.clip(np.asarray(guess, dtype=float), lo, hi)
@@ -68,8 +76,12 @@ def invert_monotone(function: Callable[[np.ndarray], tuple[np.ndarray, np.ndarra
     while active.size and iterations < max_iterations:
         iterations += 1
         sa = s[active]
-        value, slope = function(sa)
-        res = np.asarray(value, float) - t[active]
+        if differences:
+            res, slope = function(sa, t[active])
+            res = np.asarray(res, float)
+        else:
+            value, slope = function(sa)
+            res = np.asarray(value, float) - t[active]
         better = np.abs(res) < best_res[active]
         best_s[active[better]] = sa[better]
         best_res[active[better]] = np.abs(res[better])
@@ -86,9 +98,9 @@ def invert_monotone(function: Callable[[np.ndarray], tuple[np.ndarray, np.ndarra
         step_to = np.where(inside, newton, 0.5 * (lo_a + hi_a))
         ulp_s = np.spacing(np.abs(sa))
         # the Newton step itself (taken or not) at the rounding of s: T's rounding decides its last bits
-        small = np.isfinite(newton) & (np.abs(newton - sa) <= ULPS * ulp_s)
-        done = ((res == 0) | small | (hi_a - lo_a <= ULPS * ulp_s)
-                | (np.abs(res) <= ULPS * np.spacing(np.abs(t[active])) + noise))
+        small = np.isfinite(newton) & (np.abs(newton - sa) <= step_ulps * ulp_s)
+        done = ((res == 0) | small | (hi_a - lo_a <= max(step_ulps, 1.0) * ulp_s)
+                | (np.abs(res) <= floor_ulps * np.spacing(np.abs(t[active])) + noise[active]))
         bisections += int(np.count_nonzero(~inside & ~done))
         s[active] = step_to
         converged[active[done]] = True

@@ -34,8 +34,11 @@ for a pole on the path itself.
 On the circle the motion is periodic (u has period π in v): G less its secular part Σ c_{ρ,1}·iγφ (over ρ = 0
 and the poles inside the unit circle, whose L_ρ carry log x) is a function of x alone, so the advance over one period
 of u is that secular rate times π — 2πi times the residues of F inside the circle (:attr:`RationalRate.advance`).
-The secular part is evaluated from φ in double-double and the rest from x of the phase reduced by π, so long times
-keep their digits (Kepler's t(φ) after 137 orbits: 4e-16 of t).
+The secular part is evaluated from φ in double-double (its rate, too, a double-double) and the rest from x of the
+phase reduced by π, so long times keep their digits (Kepler's t(φ) after 137 orbits: 4e-16 of t);
+:meth:`RationalRate.minus` gives the integral less a target without the integral's own final rounding (t(φ) − t
+near a root, to ~1e-3 ulp of t after 1000 orbits), and :meth:`RationalRate.rounding` a first-order bound of the
+doubles' rounding at each time (the terms' sizes, and their sensitivity to x's and x − ρ's rounding).
 
 A real pole of R that the motion reaches (a root ρ on the path: the circle, the positive ray, the real line) makes
 the integral diverge there; the integral exists between the crossings around τ = 0 (:attr:`RationalRate.singular_times`)
@@ -53,6 +56,10 @@ import numpy as np
 from .quadrature_motion import DPS, NotElliptic, _mp, _split_mp, rate_coefficients_mp
 
 __all__ = ["RationalRate", "rational_rate_integral", "rational_path"]
+
+#: the roundings one term of G carries, counted in :meth:`RationalRate.rounding`: its coefficient's rounding to a
+#: double, the function's (log, power), the complex product, and its share of the sum
+TERM = 4.0
 
 
 def rational_path(motion: Any) -> str | None:
@@ -242,6 +249,12 @@ class RationalRate:
                     poles.append((complex(rho), on_path, [complex(c) for c in coefs], offset))
                 self._f["poles"] = poles
                 self._f["gamma"] = None if self.gamma is None else complex(self.gamma)
+                if self.path == "circle":
+                    # the secular rate Re(γ Σ c_{ρ,1}) over ρ = 0 and the poles inside the circle, in double-double:
+                    # rounded to a double it would put an error of ε·|t| into t after many periods
+                    inside = sum((coefs[0] for rho, on_path, coefs in self.poles
+                                  if rho == 0 or (abs(rho) < 1 and not on_path)), mp.mpc(0))
+                    self._f["secular"] = _split_mp(mp.re(inside * self.gamma))
         return self._f
 
     def _offset(self, rho: Any) -> Any:
@@ -258,26 +271,70 @@ class RationalRate:
 
     def __call__(self, t: Any, jac: tuple | None = None) -> np.ndarray:
         """∫₀^t R dt' at the times t (``jac`` is not needed: x is taken from the phase)."""
-        t = np.asarray(t, dtype=float)
-        value = self._g(t) - self._g(np.zeros(1))[0]
-        return value
+        return self.minus(t, 0.0)
 
-    def _g(self, t: np.ndarray) -> np.ndarray:
-        """Re G(x(t)) (see the module docstring), secular parts from the double-double phase."""
+    def minus(self, t: Any, target: Any) -> np.ndarray:
+        """∫₀^t R dt' − ``target`` (arrays of the same shape, or a scalar target), formed without the integral's own
+        rounding: on the circle the secular part S = Re(γΣc)·φ is a double-double product and target is subtracted
+        from it exactly, so that the difference (a residual near a root, when t(c) is inverted) keeps its digits
+        however large the integral has grown; the rest is rounded as :meth:`rounding` bounds."""
+        from ..special._doubledouble import two_sum
+
+        t = np.asarray(t, dtype=float)
+        periodic, s_hi, s_lo, _ = self._parts(t, sized=False)
+        p0, s0_hi, s0_lo, _ = self._start()
+        # (S − target − S(0)) by two exact sums of the leading parts (exactly 0 at t = 0, target = 0)
+        head, tail = two_sum(s_hi, -np.asarray(target, dtype=float))
+        head, tail2 = two_sum(head, -s0_hi)
+        return head + ((tail + tail2) + (s_lo - s0_lo) + (periodic - p0))
+
+    def rounding(self, t: Any) -> np.ndarray:
+        """A bound scale for the rounding of :meth:`minus` (and of the value, less its final rounding to a double)
+        at the times t: ε·(M(t) + M(0)), M the sum over the terms of G of |term| and of |d term/dx| times the
+        absolute rounding of x and of x − ρ (x from the phase: ε(2 + |γφ_r|)|x|, φ_r the reduced phase); the secular
+        part is exact to ~ε²|S|.  The first-order rounding bound of the sum, each term carrying a few roundings:
+        the caller scales it by a small factor and checks it against 30 digits at some times."""
+        t = np.asarray(t, dtype=float)
+        _, _, _, magnitude = self._parts(t)
+        return 2.0**-52 * (magnitude + self._start()[3])
+
+    def _start(self) -> tuple[float, float, float, float]:
+        """(P, S_hi, S_lo, M) at τ = 0 (see :meth:`_parts`)."""
+        if "start" not in self._f:
+            self._f["start"] = tuple(float(x[0]) for x in self._parts(np.zeros(1)))
+        return self._f["start"]
+
+    def _parts(self, t: np.ndarray, sized: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(P, S_hi, S_lo, M): Re G(x(t)) = P + S, S the secular part (see the module docstring) in double-double
+        (zero but on the circle), and M the magnitude that bounds the rounding of P (see :meth:`rounding`; not
+        accumulated unless ``sized``: the values alone do not pay for it)."""
         f = self._doubles()
+        zero = np.zeros(t.shape)
         if self.path == "line":
             x = t.astype(complex)
             total = np.zeros(t.shape, complex)
+            size = np.zeros(t.shape)
+            ax = np.abs(t)
             for k, q in enumerate(f["quotient"]):
-                total = total + q * x ** (k + 1) / (k + 1)
+                term = q * x ** (k + 1) / (k + 1)
+                total = total + term
+                if sized:
+                    size = size + TERM * np.abs(term)
             for rho, on_path, coefs, _ in f["poles"]:
                 d = x - rho
                 with np.errstate(all="ignore"):
-                    log = np.log(np.abs(d)) if on_path else np.log(d)
+                    ad = np.abs(d)
+                    dx = (0.5 * ax + abs(rho)) / ad  # x − ρ's relative error, over ε (ρ rounded, the difference)
+                    log = np.log(ad) if on_path else np.log(d)
                     total = total + coefs[0] * log
+                    if sized:
+                        size = size + abs(coefs[0]) * (TERM * np.abs(log) + dx)
                     for k, c in enumerate(coefs[1:], start=2):
-                        total = total + c * d ** (1 - k) / (1 - k)
-            return total.real
+                        term = c * d ** (1 - k) / (1 - k)
+                        total = total + term
+                        if sized:
+                            size = size + np.abs(term) * (TERM + (k - 1) * dx)
+            return total.real, zero, zero, size
         hi, lo = self._phase(t)
         gamma = f["gamma"]
         if self.path == "circle":
@@ -291,57 +348,91 @@ class RationalRate:
             red = dd + (de - he + lo - n * PI_LO)
             x = np.exp(gamma * red)
             inv_x = np.conj(x)
-            secular = np.zeros(t.shape, complex)
+            # x's absolute rounding (|x| = 1), over ε: exp of an argument γ·red rounded to ε|γ·red|
+            dx = 1.0 + abs(gamma) * np.abs(red)
             total = np.zeros(t.shape, complex)
+            size = np.zeros(t.shape)
             for k, q in enumerate(f["quotient"]):
-                total = total + q * x ** (k + 1) / (k + 1)
+                term = q * x ** (k + 1) / (k + 1)
+                total = total + term
+                if sized:
+                    size = size + TERM * np.abs(term) + abs(q) * (k + 1) * dx
             for rho, on_path, coefs, _ in f["poles"]:
+                if sized:
+                    with np.errstate(all="ignore"):
+                        # (x − ρ)'s relative error, over ε: x's, and ρ's rounding to a double
+                        near = (dx + abs(rho)) / np.abs(x - rho)
                 if rho == 0:
-                    secular = secular + coefs[0] * gamma
                     log = 0.0
                 elif abs(rho) < 1 and not on_path:
-                    secular = secular + coefs[0] * gamma
                     log = np.log1p(-rho * inv_x)
                 else:
                     log = np.log1p(-x / rho)
                 total = total + coefs[0] * log
+                if sized:
+                    size = size + abs(coefs[0]) * (TERM * np.abs(log) + (0.0 if rho == 0 else near))
                 for k, c in enumerate(coefs[1:], start=2):
                     with np.errstate(all="ignore"):
-                        total = total + c * (x - rho) ** (1 - k) / (1 - k)
-            # φ = red + n·period, the secular part Σ c·γ·φ with φ unreduced (hi + lo)
-            return total.real + (np.real(secular) * hi + np.real(secular) * lo)
+                        term = c * (x - rho) ** (1 - k) / (1 - k)
+                    total = total + term
+                    if sized:
+                        size = size + np.abs(term) * (TERM + (k - 1) * near)
+            # φ = red + n·period: the secular part Re(γΣc)·φ with φ unreduced (hi + lo), in double-double
+            from ..special._doubledouble import dd_mul
+
+            c_hi, c_lo = f["secular"]
+            s_hi, s_lo = dd_mul(np.broadcast_to(c_hi, t.shape).astype(float), np.full(t.shape, c_lo), hi, lo)
+            # (the double-double product's own error, ~ε²|S|, counted generously)
+            return total.real, s_hi, s_lo, size + 4.0 * 2.0**-52 * np.abs(s_hi)
         # the ray and exp paths: x = e^{γφ} > 0, or its inverse y where x is large
         g = gamma.real
         with np.errstate(over="ignore", under="ignore"):
             x = np.exp(g * hi) * (1.0 + g * lo)
             y = np.exp(-g * hi) * (1.0 - g * lo)
+        dx = 1.0 + np.abs(g * hi)  # x's relative error, over ε: exp of an argument rounded to ε|γφ|
         total = np.zeros(t.shape, complex)
+        size = np.zeros(t.shape)
         phase = g * hi + g * lo  # log x
         for k, q in enumerate(f["quotient"]):
             with np.errstate(over="ignore"):
-                total = total + q * np.exp((k + 1) * g * hi) * (1.0 + (k + 1) * g * lo) / (k + 1)
+                term = q * np.exp((k + 1) * g * hi) * (1.0 + (k + 1) * g * lo) / (k + 1)
+            total = total + term
+            if sized:
+                size = size + np.abs(term) * (TERM + (k + 1) * dx)
         for rho, on_path, coefs, offset in f["poles"]:
             if rho == 0:
                 total = total + coefs[0] * phase
+                if sized:
+                    size = size + abs(coefs[0]) * np.abs(phase) * TERM
                 for k, c in enumerate(coefs[1:], start=2):
                     with np.errstate(over="ignore"):
-                        total = total + c * np.exp((k - 1) * g * -hi) * (1.0 - (k - 1) * g * lo) / (1 - k)
+                        term = c * np.exp((k - 1) * g * -hi) * (1.0 - (k - 1) * g * lo) / (1 - k)
+                    total = total + term
+                    if sized:
+                        size = size + np.abs(term) * (TERM + (k - 1) * dx)
                 continue
             r = abs(rho)
             above = x >= r
             with np.errstate(all="ignore"):
+                # (x − ρ)'s relative rounding, over ε: (|x|·dx + |ρ|)/|x − ρ|, from y where x is large
+                near = np.where(above, (dx + r * y) / np.abs(1.0 - rho * y), (x * dx + r) / np.abs(x - rho))
                 if on_path:  # ρ > 0 on the ray: log|x − ρ|, from the nearer form
                     log = np.where(above, phase + np.log(np.abs(1.0 - rho.real * y)),
                                    np.log(r) + np.log(np.abs(1.0 - x / rho.real)))
                 else:
                     log = np.where(above, phase + np.log1p(-rho * y), np.log(-rho) + np.log1p(-x / rho) + offset)
                 total = total + coefs[0] * log
+                if sized:
+                    size = size + abs(coefs[0]) * (TERM * (np.abs(log) + np.abs(phase)) + near)
                 for k, c in enumerate(coefs[1:], start=2):
                     # (x − ρ)^{1−k}: from y where x is large (x^{1−k} (1 − ρy)^{1−k})
                     far = y ** (k - 1) * (1.0 - rho * y) ** (1 - k)
-                    near = (x - rho) ** (1 - k)
-                    total = total + c * np.where(above, far, near) / (1 - k)
-        return total.real
+                    near_value = (x - rho) ** (1 - k)
+                    term = c * np.where(above, far, near_value) / (1 - k)
+                    total = total + term
+                    if sized:
+                        size = size + np.abs(term) * (TERM + (k - 1) * near)
+        return total.real, zero, zero, size
 
     # --- 30-digit reference ---------------------------------------------------------------------------------
 

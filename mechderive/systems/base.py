@@ -78,8 +78,9 @@ class Quantity:
 
 class Solved(NamedTuple):
     """What :meth:`System.solve` returns: the requested columns (in the scene's order), the report's
-    ``details`` (must hold ``error_estimate``: a float measured on the run, or None) and the solved
-    object (a closed-form solution or a trajectory)."""
+    ``details`` (must hold ``error_estimate``: a float measured on the run, or None; may hold ``note``: which
+    method was used and why, moved to the report's note) and the solved object (a closed-form solution or a
+    trajectory)."""
 
     columns: dict
     info: dict

@@ -624,11 +624,16 @@ class ClosedMotion:
                 f, df = x, mp.mpf(1)
             return (mp.mpf(self.q_fold) + self.eps * shape.scale * f,
                     self.eps * shape.scale * df * sig_dot / mp.sqrt(2))
-        # away from folds g' ≠ 0: Newton steps from the double q on its branch
+        # away from folds g' ≠ 0: Newton steps from the double q on its branch, to the working precision (not two
+        # steps: where u = 1/q nears 0, Kepler's hyperbola at r ~ 1e12, the double q is off by 1e-3 and two steps
+        # leave 1e-12 — a reference error the estimate would take for the doubles')
         gl, dgl = self._g_mp
         q = mp.mpf(q_double)
-        for _ in range(2):
-            q = q - (gl(q) - u) / dgl(q)
+        for _ in range(40):
+            step = (gl(q) - u) / dgl(q)
+            q = q - step
+            if abs(step) <= mp.eps * 16 * abs(q):
+                break
         return q, (mo.mp_u_dot(sn, cn, dn) if u_dot is None else u_dot) / dgl(q)
 
 

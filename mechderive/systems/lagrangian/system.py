@@ -302,9 +302,11 @@ class LagrangianSystem(System):
         except (ArithmeticError, ValueError) as exc:  # the 30-digit reference itself failed (a 0 or ∞ there)
             raise OutOfReach(f"the closed form's 30-digit reference could not be evaluated on this motion "
                              f"({type(exc).__name__}: {exc or 'no detail'}): its error is not measured") from None
-        # never below the rounding of each column's own size (the sampled times may all sit where it is small)
-        for name in per_column:
-            per_column[name] = max(per_column[name], 4 * 2.0**-52 * float(np.max(np.abs(cols[name]))))
+        # never below the rounding of each column's own size (the sampled times may all sit where it is small) —
+        # unless the motion bounds every sample itself (its bounds hold each sample's own rounding)
+        if not getattr(motion, "bounds_every_sample", False):
+            for name in per_column:
+                per_column[name] = max(per_column[name], 4 * 2.0**-52 * float(np.max(np.abs(cols[name]))))
         estimate = max([per_column[n] for n in per_column if n in wanted] + [estimate])
         names = [*d.coordinates, *(q + "_dot" for q in d.coordinates)]
         # a cyclic angle nobody asked for stays at its start: the invariants do not depend on it
@@ -344,6 +346,7 @@ class LagrangianSystem(System):
                 "absolute, in the outputs' units: the doubles against an evaluation of the same closed form at 30 "
                 "digits at up to 6 of the times (the last included)")),
             "closed_form": motion.describe(),
+            **({"note": motion.note} if getattr(motion, "note", None) else {}),
             "per_column_estimate": per_column,
             "cyclic_coordinates": list(eq.cyclic),
             "energy_conserved": True,
@@ -512,11 +515,25 @@ class LagrangianSystem(System):
         return self.__dict__["_reduced_model"]
 
     def cyclic_rates(self) -> dict:
-        """{cyclic coordinate: (N, D) or the reason}: ċ = N(u)/D(u) (:func:`mechderive.core.quadrature.cyclic_rates`)."""
+        """{cyclic coordinate: (N, D) or the reason}: ċ = N(u)/D(u) (:func:`mechderive.core.quadrature.cyclic_rates`),
+        u the substitution of the reduction in t.  Where that reduction has none (Kepler's problem: u = 1/r gives
+        degree 6; L depending on t other than through a gauge), every cyclic coordinate's entry is the reason,
+        ``"no reduction in t: …"`` — its rate is then no function of a u with u̇² = P(u) (an orbit along a cyclic
+        coordinate has its own rates, in that coordinate)."""
         if "_rates" not in self.__dict__:
-            from ...core.quadrature import cyclic_rates
+            from ...core.quadrature import NoQuadrature, cyclic_rates
+            from ...errors import DerivationError
 
-            self.__dict__["_rates"] = cyclic_rates(self.reduced_model(), self.reduction()[0])
+            found, reason = self.reduction()
+            if found is None:
+                try:
+                    model = self.reduced_model()
+                except (NoQuadrature, DerivationError):  # t no gauge: the cyclic coordinates of L itself
+                    model = self.equations.lagrangian_model
+                rates = {c.func.__name__: f"no reduction in t: {reason}" for c in model.cyclic_coordinates}
+            else:
+                rates = cyclic_rates(self.reduced_model(), found)
+            self.__dict__["_rates"] = rates
         return self.__dict__["_rates"]
 
     def _closed_summaries(self, scene: "Scene", drifts: dict, names: list[str], base: Any = None) -> dict:

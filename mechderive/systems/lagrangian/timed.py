@@ -18,11 +18,21 @@ approaching the ends of the orbit's domain geometrically (a pole of dt/ds: c →
 the cubic Hermite interpolant of the inverse s(t) on the cell (its slopes ds/dt = ċ at the nodes), so that Newton
 starts within ~1e-7 of the root and takes two or three steps.
 
-The error estimate is measured on the run.  At each sample the residual ρᵢ = t(sᵢ) − tᵢ left by the iteration, plus
-the closed form's own error in t (doubles against 30 digits at up to six samples), is an error of δtᵢ in time, so of
-δsᵢ = δtᵢ·|ċᵢ| in c; each output X moves by |X(sᵢ + δsᵢ) − X(sᵢ)| for it (evaluated, not linearised), and its own
-evaluation error at fixed s is measured against a 30-digit evaluation of the same formulas (c = c(0) + s is exact
-in s; q̇ = (dq/ds)/(dt/ds) from the 30-digit dq/ds and dt/ds).
+The error estimate is a bound at every sample, measured on the run (:meth:`TimedOrbit.error_bounds`).  At a sample
+the output differs from the exact motion at that t by (i) the doubles' error at the sample's own s = c − c(0), and
+(ii) the distance from s to the exact root s*, |s − s*| ≤ δs = (|ρ| + δt)/|dt/ds|, ρ = t(s) − t the residual the
+iteration left (formed without t's own rounding, :meth:`~mechderive.solvers.quadrature_rational.RationalRate.minus`,
+where the integral has a secular part) and δt the error of that residual.  Each output moves by |dX/ds|·δs for (ii)
+(dX/ds by central differences along s); (i) and δt come from a rounding model per sample, calibrated against 30
+digits on the run: an output X at fixed s (q, q̇, ċ, another cyclic coordinate and its rate) is within
+k·ε·(|X| + |dX/ds|/κ) of its exact value (the relative rounding of a few operations, and the rounding of the phase
+κs + v_s and of u, an error of ~ε/κ in s: modelled per output, not per factor, because q̇ = (dq/ds)/(dt/ds) takes both
+factors from the same rounded u, and near Kepler's asymptote their 1e-3 relative errors cancel), an integral within
+k·its own first-order rounding bound (the sum of its terms' sizes and sensitivities,
+:meth:`~mechderive.solvers.quadrature_rational.RationalRate.rounding`), k the larger of a floor (:data:`K_MODEL`,
+:data:`K_SUM`) and :data:`SAFETY` times the largest ratio of the measured error to the model at up to 8 samples (the
+last, five by the golden ratio, the slowest and the fastest in c), where every output is evaluated again at 30
+digits.  c = c(0) + s is exact in s but for half an ulp.
 """
 
 from __future__ import annotations
@@ -38,6 +48,14 @@ __all__ = ["TimedOrbit", "timed_motion"]
 
 #: cells of the table of t(s) over one period of a periodic orbit
 CELLS = 256
+#: the floor of the rounding model's factor for an output at fixed s, k·ε·(|X| + |dX/ds|/κ): over 30000 samples of 500
+#: random Kepler runs (ellipses to 2000 orbits, hyperbolae to r ~ 1e12) the doubles' error was at most 3.4 of
+#: ε·(|X| + |dX/ds|/κ) — 6 leaves a margin of 1.8 where the 30-digit samples miss the worst rounding
+K_MODEL = 6.0
+#: the floor of the factor on an integral's own rounding bound (measured at most 0.27 of it, same samples)
+K_SUM = 1.0
+#: the factor on the largest ratio measured at the 30-digit samples (the others' roundings are other draws)
+SAFETY = 2.0
 
 
 def _mp():
@@ -51,9 +69,11 @@ class TimedOrbit:
     :class:`~.closed.ClosedMotion` (``columns``, ``estimate``, ``check_derivatives``, ``describe``, ``summary``,
     ``period``, ``kind``), t being the independent variable again."""
 
-    estimate_kind = ("absolute, in the outputs' units: at every sample the residual t(c) − t of the inversion plus "
-                     "the closed form's error in t, times the rate (each output evaluated over that shift of c), plus "
-                     "the doubles against 30 digits of the same formulas at fixed c at up to 6 of the times")
+    estimate_kind = ("absolute, in the outputs' units, a bound at every sample: the doubles' error at the sample's c "
+                     "from a rounding model calibrated against 30 digits at up to 8 of the times, plus the output's rate "
+                     "along c times |c − c*| ≤ (|t(c) − t| + the residual's error)·|dc/dt|")
+    #: the estimate bounds every sample (the run's report needs no floor of a column's rounding)
+    bounds_every_sample = True
 
     def __init__(self, system: Any, parameters: dict, initial: dict, along: str, energy_shift: float = 0.0,
                  in_t: str = "") -> None:
@@ -130,6 +150,20 @@ class TimedOrbit:
         """(t(s), dt/ds) in doubles: the orbit's integral and its rate D/N(u), no checks (s inside the domain)."""
         jac = self.motion.jacobi(s)
         return self._integral(s, jac), self.orbit._rate_values("t", s, jac)
+
+    def _residual_and_rate(self, s: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(t(s) − target, dt/ds): the difference without t's own rounding where the integral forms it
+        (:meth:`~mechderive.solvers.quadrature_rational.RationalRate.minus`)."""
+        jac = self.motion.jacobi(s)
+        minus = getattr(self._integral, "minus", None)
+        value = minus(s, target) if minus is not None else self._integral(s, jac) - target
+        return value, self.orbit._rate_values("t", s, jac)
+
+    def _t_rounding(self, s: np.ndarray) -> np.ndarray | None:
+        """The integral's own rounding bound of t(s) − target at s, or None where it has none (then the residual
+        is rounded to ulp(t) and the generic model applies)."""
+        rounding = getattr(self._integral, "rounding", None)
+        return None if rounding is None or getattr(self._integral, "minus", None) is None else rounding(s)
 
     def _build_table(self) -> dict:
         """The nodes s_k, σ·t(s_k) (increasing) and ds/d(σt) there; refused if dt/ds changes sign at a node."""
@@ -217,10 +251,20 @@ class TimedOrbit:
         if self.periodic:
             lo = np.where(k == 0, X[-2] - self.period_along + shift, lo)
             hi = np.where(k == len(X) - 2, X[1] + self.period_along + shift, hi)
-        # t(s) is a sum of terms of the size of the table's times (the periodic part, G(x) − G(x0)): rounded to
-        # a few ulp of those even where t itself is small
-        noise = 4 * float(np.spacing(max(abs(Y[0]), abs(Y[-1])) if self.periodic else max(abs(Y[len(Y) // 2]), 1.0)))
-        result = invert_monotone(self._t_and_rate, t, lo, hi, guess + shift, increasing=self.sigma > 0, noise=noise)
+        start = guess + shift
+        rounding = self._t_rounding(start)
+        if rounding is not None:
+            # t(s) − t formed without t's rounding: the iteration goes on to the double s nearest the root, or until the
+            # residual is below an eighth of the integral's own rounding bound (its actual rounding, measured at most
+            # 0.27 of the bound, makes further steps noise)
+            noise = rounding / 8
+        else:
+            # t(s) is a sum of terms of the size of the table's times (the periodic part, G(x) − G(x0)): rounded to
+            # a few ulp of those even where t itself is small, and to a few ulp of t
+            noise = 4 * float(np.spacing(max(abs(Y[0]), abs(Y[-1])) if self.periodic else
+                                         max(abs(Y[len(Y) // 2]), 1.0))) + 4 * np.spacing(np.abs(t))
+        result = invert_monotone(self._residual_and_rate, t, lo, hi, start, increasing=self.sigma > 0, noise=noise,
+                                 differences=True, step_ulps=0.0)
         if t.size >= self.last_inversion.get("samples", 0):
             self.last_inversion = {"samples": int(t.size), "iterations": result.iterations, "bisections": result.bisections,
                                    "unconverged": int(np.count_nonzero(~result.converged)),
@@ -230,6 +274,11 @@ class TimedOrbit:
         return out
 
     # --- the columns ----------------------------------------------------------------------------------
+
+    def _state_names(self) -> list[str]:
+        """The state columns in t: every coordinate and its rate."""
+        return [self.along, self.along + "_dot", self.remaining, self.remaining + "_dot", *self.others,
+                *(c + "_dot" for c in self.others)]
 
     def _orbit_names(self) -> list[str]:
         r = self.remaining
@@ -254,44 +303,130 @@ class TimedOrbit:
     # --- the estimate, the self-check ------------------------------------------------------------------
 
     def estimate(self, t: np.ndarray, wanted: Sequence[str]) -> tuple[float, dict]:
-        """The largest estimated error of the requested columns, and each column's (see the module docstring):
-        the evaluation at fixed s against 30 digits at up to six samples, plus |X(s + δs) − X(s)| with
-        δs = (|t(s) − t| + the error of t(s))·|ċ| at every sample."""
+        """The largest bound of the requested columns over the samples, and each column's (see :meth:`error_bounds`)."""
+        bounds = self.error_bounds(t, wanted)
+        worst = {name: float(np.max(b)) if b.size else 0.0 for name, b in bounds.items()}
+        chosen = [worst[n] for n in wanted if n in worst]
+        return (max(chosen) if chosen else 0.0), worst
+
+    def _length(self) -> float:
+        """The orbit's scale in s, 1/κ (the phase κs + v_s): its rounding, and u's, is an error ~ε/κ in s."""
+        mo = self.motion
+        if getattr(mo, "elementary", False) and mo.form == "polynomial":
+            return float(self.orbit.time_scale)  # u polynomial in s: κ = 1 is a unit, not a scale
+        return 1.0 / float(mo.kappa) if not mo.steady else float(self.orbit.time_scale)
+
+    def _steps(self, s: np.ndarray, length: float) -> np.ndarray:
+        """Central-difference steps along s: 2⁻¹⁶ of the orbit's scale, at most 2⁻⁸ of the distance to a finite end of
+        the domain (near Kepler's asymptote the columns vary on that distance), never below 4 ulp of s."""
+        h = np.full(s.shape, 2.0**-16 * length)
+        lo, hi = self.domain
+        with np.errstate(invalid="ignore"):
+            if np.isfinite(hi):
+                h = np.minimum(h, 2.0**-8 * (hi - s))
+            if np.isfinite(lo):
+                h = np.minimum(h, 2.0**-8 * (s - lo))
+        return np.maximum(h, 4 * np.spacing(np.abs(s)))
+
+    def error_bounds(self, t: np.ndarray, wanted: Sequence[str] | None = None) -> dict:
+        """{column: array}: at each sample a bound of the output's error against the exact motion at that t (see the
+        module docstring); raises :class:`OutOfReach` where a bound is not finite (the motion's error is then not
+        known).  ``wanted`` is accepted for the interface; every state column is bounded."""
         mp = _mp()
-        t = np.asarray(t, dtype=float)
-        s, residual = self.inverse(t)
-        here = self._state(s)
-        picks = golden_picks(len(t))
-        names = self._orbit_names() + ["t"]
-        got = self.orbit.columns(s[picks], names)
-        refs = self.orbit.reference_values(s[picks], got)
-        worst: dict = {}
-        t_error = 0.0
-        r, c = self.remaining, self.along
         from ...solvers.quadrature_motion import REFERENCE_DPS
+
+        eps = 2.0**-52
+        t = np.asarray(t, dtype=float)
+        if not t.size:
+            return {name: np.zeros(0) for name in self._state_names()}
+        s, residual = self.inverse(t)
+        r, c = self.remaining, self.along
+        names = self._orbit_names()
+        cols = self.orbit.columns(s, names)
+        here = self._state(s, cols)
+        length = self._length()
+        # each output's rate along s: q's and the other cyclic coordinates' from the closed form, c's = 1, the rates'
+        # by central differences over the steps actually taken ((s ± h) − s is exact)
+        outputs = [n for n in self._state_names() if n != c]
+        if self.steady:
+            slope = {n: np.zeros(s.shape) for n in outputs}
+        else:
+            h = self._steps(s, length)
+            up, down = s + h, s - h
+            plus, minus = self._state(up), self._state(down)
+            width = (up - s) + (s - down)
+            slope = {n: (plus[n] - minus[n]) / width for n in outputs}
+        for q in (r, *self.others):
+            slope[q] = cols[q + "_dot"]
+        rate_abs = np.abs(cols["t_dot"])
+
+        # the rounding model at fixed s, per output (in its units): generic ε(|X| + |dX/ds|·L [+ an integral's terms'
+        # size]), or an integral's own bound
+        offset = {other: float(np.median(np.abs(slope[other]))) * length for other in self.others}
+
+        def model(name: str, index: Any = slice(None)) -> tuple[np.ndarray, float]:
+            integral = self.orbit.rate(name)[0] if name in self.others else None
+            if getattr(integral, "rounding", None) is not None:
+                return integral.rounding(s[index]) + eps * np.abs(here[name][index]), K_SUM
+            return eps * (np.abs(here[name][index]) + np.abs(slope[name][index]) * length + offset.get(name, 0.0)), \
+                K_MODEL
+
+        t_rounding = self._t_rounding(s)
+        if self.steady:
+            t_model, t_floor = None, K_MODEL
+        elif t_rounding is not None:
+            t_model, t_floor = t_rounding, K_SUM
+        else:
+            # the residual of a plain integral: t's own rounding, its rate over the orbit's scale, and the size of its
+            # terms (the time over the orbit's scale)
+            t_model = eps * (np.abs(t) + (rate_abs + float(np.median(rate_abs))) * length)
+            t_floor = K_MODEL
+        # --- calibration: every output at fixed s and the residual, against 30 digits at up to 8 samples -----------
+        extra = [int(np.argmax(rate_abs)), int(np.argmin(rate_abs))]
+        picks = np.unique(np.concatenate([golden_picks(len(t)), extra])).astype(int)
+        got = self.orbit.columns(s[picks], names + ["t"])
+        refs = self.orbit.reference_values(s[picks], got)
+        factors: dict = {}
+
+        def ratio(measured: float, scale: float) -> float:
+            return measured / scale if scale > 0 else (np.inf if measured > 0 else 0.0)
 
         with mp.workdps(REFERENCE_DPS):
             for i, ref in enumerate(refs):
-                t_error = max(t_error, abs(float(got["t"][i]) - float(ref["t"])) + 2.0**-52 * abs(float(ref["t"])))
-                rate = 1 / ref["t_dot"]
-                want = {c: mp.mpf(self.c0) + mp.mpf(float(s[picks[i]])), c + "_dot": rate, r: ref[r],
-                        r + "_dot": ref[r + "_dot"] * rate}
+                p = picks[i]
+                inverse_rate = 1 / ref["t_dot"]
+                want = {c + "_dot": inverse_rate, r: ref[r], r + "_dot": ref[r + "_dot"] * inverse_rate}
                 for other in self.others:
-                    want[other], want[other + "_dot"] = ref[other], ref[other + "_dot"] * rate
+                    want[other], want[other + "_dot"] = ref[other], ref[other + "_dot"] * inverse_rate
                 for name, value in want.items():
-                    diff = abs(float(here[name][picks[i]]) - float(value)) + 2.0**-52 * abs(float(value))
-                    worst[name] = max(worst.get(name, 0.0), diff)
-        # the inversion: an error δt in time is δs = δt·|ċ| in s; each column moves by what it does over δs
-        delta_t = np.abs(residual) + t_error
-        delta_s = delta_t * np.abs(here[c + "_dot"])
-        moved = self._state(s + delta_s)
-        for name in worst:
-            with np.errstate(invalid="ignore"):
-                shift = np.abs(moved[name] - here[name])
-            worst[name] += float(np.max(shift)) if shift.size else 0.0
-        worst[c] = max(worst[c], float(np.max(delta_s)) if delta_s.size else 0.0)
-        chosen = [worst[n] for n in wanted if n in worst]
-        return (max(chosen) if chosen else 0.0), worst
+                    measured = float(abs(mp.mpf(float(here[name][p])) - value))
+                    scale, _ = model(name, slice(p, p + 1))
+                    factors[name] = max(factors.get(name, 0.0), ratio(measured, float(scale[0])))
+                # the residual's own error: t(s) − t as formed against 30 digits
+                measured = float(abs(mp.mpf(float(residual[p])) - (ref["t"] - mp.mpf(float(t[p])))))
+                scale = abs(float(s[p])) * eps * rate_abs[p] if self.steady else float(t_model[p])
+                factors["t"] = max(factors.get("t", 0.0), ratio(measured, scale))
+        #: the last run's measured ratios of the error to the model at the 30-digit samples, per output and "t"
+        self.calibration = dict(factors)
+        if self.steady:
+            # t(s) = s·(dt/ds): the rate's error (ċ's, relative) times t, and the product's rounding
+            relative = max(K_MODEL, SAFETY * factors.get(c + "_dot", 0.0)) * eps
+            t_error = np.abs(t) * (relative + eps)
+        else:
+            t_error = max(t_floor, SAFETY * factors.get("t", 0.0)) * t_model
+        # --- the distance to the exact root, and each output's bound --------------------------------------------
+        with np.errstate(all="ignore"):
+            delta_s = (np.abs(residual) + t_error) / rate_abs
+            out = {c: 0.5 * np.spacing(np.abs(here[c])) + delta_s}
+            for name in outputs:
+                scale, floor = model(name)
+                out[name] = max(floor, SAFETY * factors.get(name, 0.0)) * scale + np.abs(slope[name]) * delta_s
+        for name, values in out.items():
+            if not np.all(np.isfinite(values)):
+                i = int(np.argmax(~np.isfinite(values)))
+                raise OutOfReach(f"the error of {name} is not bounded at t = {t[i]:.12g} (the orbit's columns or their "
+                                 f"rates along {c} are not finite there): no estimate, no answer")
+        return out
 
     def check_derivatives(self, t: np.ndarray, names: Sequence[str]) -> str | None:
         """None, or what failed: each requested angle's central difference in t over ±h (h = 10⁻⁴ of the time scale)
@@ -332,6 +467,17 @@ class TimedOrbit:
         if self.last_inversion:
             out["inversion"] = dict(self.last_inversion)
         return out
+
+    @property
+    def note(self) -> str:
+        """The method and why, for the run's report (as ``auto`` says why it integrates): exact in t through the orbit
+        along c, because the reduction in t has no closed form."""
+        orbit = self.orbit.describe()
+        c, r = self.along, self.remaining
+        along = " and ".join(f"{q}({c})" for q in (r, *self.others))
+        return (f"exact in t through the orbit along {c}: {along} in closed form ({orbit['substitution']}, "
+                f"(du/d{c})² of degree {orbit['degree']}) and t({c}) = ∫ d{c}/{c}_dot, inverted for {c}(t) by Newton "
+                f"— the reduction in t has no closed form ({self.in_t})")
 
     def summary(self, name: str) -> float:
         """``<q>_min``, ``<q>_max`` (the orbit's turning points: the same in t), ``<c>_per_period`` (the orbit's period
