@@ -19,6 +19,8 @@ import mpmath
 import numpy as np
 import pytest
 
+from mechderive.errors import InvalidInputError
+
 from .test_s3_6_closed_form_rates import _elements  # the orbital elements by hand, GM = m = 1
 
 KEPLER = "m/2*(r_dot**2 + r**2*phi_dot**2) + k/r"
@@ -139,6 +141,13 @@ def test_kepler_ellipse_in_time_is_keplers_equation_over_a_hundred_orbits():
     assert abs(period - kepler_period) <= 4 * np.spacing(kepler_period)
     # measured here: φ 1.1e-13 at φ ≈ 760 (≈ 1 ulp), r, ṙ, φ̇ ≤ 2e-15; 16 ulp of each column's largest value is ample
     _compare(motion, times, want, factor=16)
+
+
+def test_an_infinite_time_is_refused_clearly():
+    # (the double-double phase of t = inf recursed without end: RecursionError)
+    motion = _motion(ELLIPSE)
+    with pytest.raises(InvalidInputError, match="finite times"):
+        motion.columns(np.array([0.0, np.inf]), NAMES)
 
 
 def test_kepler_hyperbola_in_time_is_the_hyperbolic_keplers_equation():

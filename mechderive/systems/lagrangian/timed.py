@@ -41,6 +41,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from ...errors import InvalidInputError
 from ..base import OutOfReach
 from .closed import ClosedMotion, golden_picks
 
@@ -211,6 +212,9 @@ class TimedOrbit:
         from ...solvers.monotone_inverse import invert_monotone
 
         t = np.asarray(t, dtype=float)
+        if not np.all(np.isfinite(t)):
+            # (the double-double phase of an infinite time would recurse without end)
+            raise InvalidInputError(f"expected finite times for the orbit solved in t, got {t[~np.isfinite(t)][:3]}")
         key = (t.shape, t.tobytes())
         if key in self._cache:
             return self._cache[key]
