@@ -234,7 +234,13 @@ def _fuzz(examples: int, budget: float):
     def one(case):
         system, claim, given_ = case
         o = run_case(system, claim, given_, budget)
-        assert not problems(o, budget, TEST_SLACK), (case, problems(o, budget, TEST_SLACK), o)
+        found = problems(o, budget, TEST_SLACK)
+        if found and all(" s for a budget of " in f for f in found):
+            # only too slow: once more, so that a stall of the machine (measured: 2.5 s for a refusal that takes
+            # 50 µs, with other processes on both cores) is not taken for a claim that escapes its budget
+            o = run_case(system, claim, given_, budget)
+            found = problems(o, budget, TEST_SLACK)
+        assert not found, (case, found, o)
         assert not os.path.exists(CANARY), (case, "injected code ran")
 
     one()
