@@ -53,7 +53,7 @@ def _exists(path: Path, shown: str) -> bool:
 
 
 def _load(spec: str | None):
-    from ..scenes.builtin import DEFAULT, list_scenes, load_builtin
+    from ..scenes.builtin import DEFAULT, find_builtin, list_scenes, load_builtin
     from ..scenes.output import _shown
     from ..scenes.schema import load_scene
 
@@ -66,9 +66,10 @@ def _load(spec: str | None):
         if not exists:
             raise InvalidInputError(f"scene file {shown}: expected an existing file, got no such file")
         return load_scene(path)
+    text = find_builtin(spec)  # not list_scenes(): that imports every system, the cat's and the Lagrangian's
+    if text is not None:
+        return load_scene(text, name=spec)
     names = [n for n, _ in list_scenes()]
-    if spec in names:
-        return load_builtin(spec)
     raise InvalidInputError(f"scene {shown}: expected a .toml file or a built-in scene ({', '.join(names)})")
 
 
