@@ -40,7 +40,7 @@ def lookup(name: str) -> tuple[str, int] | None:
     """(stdout text, exit status) stored under ``name``, or None."""
     if not codecache.disk_cache_enabled():
         return None
-    with cachefs.directory(codecache.cache_dir(), (codecache.fingerprint(), _FOLDER), create=False) as folder:
+    with cachefs.directory(codecache._root(), (codecache.fingerprint(), _FOLDER), create=False) as folder:
         if folder is None:
             return None
         payload = cachefs.unseal(name, cachefs.read_file(folder, name, limit=_LIMIT))
@@ -60,6 +60,6 @@ def store(name: str, stdout: str, status: int) -> None:
     payload = json.dumps({"stdout": stdout, "status": status}).encode("utf-8")
     if len(payload) > _LIMIT:
         return
-    with cachefs.directory(codecache.cache_dir(), (codecache.fingerprint(), _FOLDER), create=True) as folder:
+    with cachefs.directory(codecache._root(), (codecache.fingerprint(), _FOLDER), create=True) as folder:
         if folder is not None:
             cachefs.write_file(folder, name, cachefs.seal(name, payload))

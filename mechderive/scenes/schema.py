@@ -95,14 +95,12 @@ from __future__ import annotations
 import math
 import os
 import re
-import secrets
 import stat
 import sys
 import tomllib
 from collections.abc import Mapping
 from dataclasses import field
-from pathlib import Path
-from typing import Any, Iterable
+from typing import TYPE_CHECKING, Any, Iterable
 
 import numpy as np
 
@@ -121,6 +119,9 @@ from ..systems.scene_keys import key_name as _key_name
 from ..systems.scene_keys import number as _number
 from ..systems.scene_keys import one_of as _one_of
 from ..systems.scene_keys import show as _show
+
+if TYPE_CHECKING:  # pragma: no cover
+    from pathlib import Path
 
 __all__ = [
     "Scene",
@@ -677,6 +678,8 @@ def _parse_toml(text: str, source: str) -> dict[str, Any]:
             raise
         except ValueError:
             limit = sys.get_int_max_str_digits()
+            import secrets  # (with pathlib, ~10 ms of a warm run when imported at the top)
+
             nonce = "".join(secrets.choice("0123456789") for _ in range(18))
             huge: dict[str, str] = {}
 
@@ -721,6 +724,8 @@ method, rtol, strict and tables [parameters], [initial], [time], [output]
     """
     default_name = None
     if isinstance(path_or_text, os.PathLike):
+        from pathlib import Path
+
         path = Path(path_or_text)
         source = f"file {str(path)!r}"
         text = _read_file(path, source)
