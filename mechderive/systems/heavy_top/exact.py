@@ -328,8 +328,6 @@ class _Pass:
         sn, cn, dn of r — going through am(r) would amplify its rounding by 1/dn near the turning
         points when m → 1.
         """
-        from ...special.integrals import pi_of_am
-
         one_minus_n = self.sol._mp.get("one_minus_n", {})
         batch = []
         for n in ns:
@@ -348,6 +346,8 @@ class _Pass:
                 if n in batch:
                     self._get(f"pi({n!r})", lambda: value.reshape(shape))
         elif batch:
+            from ...special.integrals import pi_of_am  # (here: the series' motions never load the integrals)
+
             shape = np.shape(self.phase()[1])
             flat = [np.reshape(x, (1, -1)) for x in self.reduced_jacobi()]
             values = np.asarray(pi_of_am(np.array(batch)[:, None], np.reshape(self.phase()[1], (1, -1)),
