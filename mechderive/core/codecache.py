@@ -121,8 +121,8 @@ def fingerprint() -> str:
 
     Reading and hashing every source file took ~8 ms of each warm run.  So the hash is recorded in the
     cache root (``stamps/``, sealed as the code is) under a *stamp* of the same files' paths, sizes,
-    modification times (ns) and inodes and of the versions (~2 ms to take): a later process with the
-    same stamp reads the recorded fingerprint instead of the files — the trust Python's own bytecode
+    modification and change times (ns) and inodes and of the versions (~2 ms to take): a later process with
+    the same stamp reads the recorded fingerprint instead of the files — more than the trust Python's own bytecode
     cache puts in a source's size and modification time.  Any edit, checkout or install (the folders on
     ``sys.path`` change) changes the stamp, and the fingerprint is computed from the bytes again.
     """
@@ -150,7 +150,9 @@ def fingerprint() -> str:
             installs.append((entry, os.stat(entry or ".").st_mtime_ns))
         except OSError:
             installs.append((entry, None))
-    stamp = cachefs.sha256(repr(([(rel, st.st_size, st.st_mtime_ns, st.st_ino) for rel, st in files],
+    # the change time too: an edit that keeps the size and sets the modification time back (cp -p, tar, rsync -t,
+    # touch -r over a file rewritten in place) still changes it, and no program can set it
+    stamp = cachefs.sha256(repr(([(rel, st.st_size, st.st_mtime_ns, st.st_ctime_ns, st.st_ino) for rel, st in files],
                                  sys.version, installs)).encode()).hexdigest()[:32]
     recorded = _stamped(stamp)
     if recorded is not None:
