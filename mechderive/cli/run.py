@@ -66,8 +66,9 @@ def _load(spec: str | None):
     from ..scenes.output import _shown
     from ..scenes.schema import load_scene
 
+    # the parsed TOML from the disk cache where this very text was read before (no TOML parser imported)
     if spec is None:
-        return load_builtin(DEFAULT)
+        return load_builtin(DEFAULT, cached=True)
     shown = _shown(spec)
     bare = spec not in ("", os.curdir, os.pardir) and os.sep not in spec and not (os.altsep and os.altsep in spec)
     if not bare or _exists(spec, shown) or _suffix(spec) == ".toml":
@@ -79,10 +80,10 @@ def _load(spec: str | None):
         if path.suffix == ".toml" or exists:
             if not exists:
                 raise InvalidInputError(f"scene file {shown}: expected an existing file, got no such file")
-            return load_scene(path)
+            return load_scene(path, cached=True)
     text = find_builtin(spec)  # not list_scenes(): that imports every system, the cat's and the Lagrangian's
     if text is not None:
-        return load_scene(text, name=spec)
+        return load_scene(text, name=spec, cached=True)
     names = [n for n, _ in list_scenes()]
     raise InvalidInputError(f"scene {shown}: expected a .toml file or a built-in scene ({', '.join(names)})")
 

@@ -75,6 +75,7 @@ def find_builtin(name: str) -> str | None:
     return None
 
 
-def load_builtin(name: str) -> Scene:
-    """The built-in scene ``name``, parsed and checked, with ``Scene.name == name``."""
-    return load_scene(scene_text(name), name=name)
+def load_builtin(name: str, *, cached: bool = False) -> Scene:
+    """The built-in scene ``name``, parsed and checked, with ``Scene.name == name`` (``cached``: see
+    :func:`~.schema.load_scene`)."""
+    return load_scene(scene_text(name), name=name, cached=cached)

@@ -97,7 +97,6 @@ import os
 import re
 import stat
 import sys
-import tomllib
 from collections.abc import Mapping
 from dataclasses import field
 from typing import TYPE_CHECKING, Any, Iterable
@@ -664,13 +663,56 @@ def _parse_float(text: str) -> Any:
     return x
 
 
-def _parse_toml(text: str, source: str) -> dict[str, Any]:
+def _parse_toml(text: str, source: str, cached: bool = False) -> dict[str, Any]:
+    """:func:`_read_toml` of ``text``; with ``cached``, what it gave for the very same text in an earlier process.
+
+    A document of plain values (tables, arrays, strings, integers, floats, booleans) is kept in the disk cache
+    (:mod:`mechderive.core.textcache`, under the fingerprint of the package and the Python version, so of
+    this tomllib), named by the SHA-256 of the text, as :mod:`marshal` data: reading it back skips importing
+    tomllib (its regular expressions: ~3 ms of a warm run) and parsing.  Anything else (a date, a number no
+    double holds, an error) is read anew each time.
+    """
+    if not cached:
+        return _read_toml(text, source)
+    import marshal
+
+    from ..core import cachefs, textcache
+
+    name = f"scene-{cachefs.sha256(text.encode('utf-8', 'surrogatepass')).hexdigest()[:40]}.marshal"
+    stored = textcache.get(name)
+    if stored is not None:
+        try:
+            document = marshal.loads(stored)
+        except (EOFError, ValueError, TypeError):  # pragma: no cover - sealed, so written by us
+            document = None
+        if type(document) is dict and _plain(document):
+            return document
+    document = _read_toml(text, source)
+    if _plain(document):
+        textcache.put(name, marshal.dumps(document))
+    return document
+
+
+def _plain(value: Any) -> bool:
+    """Whether ``value`` is made of dicts with str keys, lists, str, int, float and bool only (what marshal
+    gives back as it was: not a float subclass such as :class:`_Underflowed`, nor a date)."""
+    kind = type(value)
+    if kind is dict:
+        return all(type(k) is str and _plain(v) for k, v in value.items())
+    if kind is list:
+        return all(_plain(v) for v in value)
+    return kind in (str, int, float, bool)
+
+
+def _read_toml(text: str, source: str) -> dict[str, Any]:
     """``tomllib.loads`` with every failure an :class:`InvalidInputError` saying where it is.
 
     Python refuses to convert an integer of more than ``sys.get_int_max_str_digits()`` (4300)
     digits to an int; those (which no double holds either) are read as :class:`_Unrepresentable`
     so that the check of their key refuses them by name.
     """
+    import tomllib
+
     try:
         try:
             return tomllib.loads(text, parse_float=_parse_float)
@@ -707,7 +749,7 @@ def _parse_toml(text: str, source: str) -> dict[str, Any]:
         raise InvalidInputError(f"scene {source}: not valid TOML: {str(exc).splitlines()[0]}") from None
 
 
-def load_scene(path_or_text: os.PathLike | str, *, name: str | None = None) -> Scene:
+def load_scene(path_or_text: os.PathLike | str, *, name: str | None = None, cached: bool = False) -> Scene:
     """Read a scene from a file (a :class:`pathlib.Path`) or from TOML text (a ``str``).
 
     A file's scene is named after the file's stem (if that is a valid name) unless it has a
@@ -715,6 +757,9 @@ def load_scene(path_or_text: os.PathLike | str, *, name: str | None = None) -> S
     directory) of at most :data:`MAX_SCENE_BYTES` bytes of UTF-8 text.  TOML syntax errors, files
     that cannot be read and numbers no double holds become
     :class:`~mechderive.errors.InvalidInputError` naming the file, the line or the key.
+    ``cached``: the parsed TOML is kept in the disk cache, by the text's hash, and read back from it
+    (the command line's runs: a warm one imports no TOML parser; see :func:`_parse_toml`); the scene is
+    checked all the same.
 
     >>> load_scene('system = "heavy_top"\\nsamples = 5')
     Traceback (most recent call last):
@@ -740,7 +785,7 @@ method, rtol, strict and tables [parameters], [initial], [time], [output]
             raise InvalidInputError(f"scene text: expected at most {MAX_SCENE_BYTES} characters, got {len(text)}")
     else:
         raise InvalidInputError(f"scene: expected a pathlib.Path or TOML text (a str), got {_show(path_or_text)}")
-    document = _parse_toml(text, source)
+    document = _parse_toml(text, source, cached)
     if name is None and "name" not in document:
         name = default_name
     return parse_scene(document, name=name)
