@@ -11,6 +11,9 @@ Only answers that cannot change are kept: the built-in systems (a system registe
 be a different one under the same name next time), finished verdicts (never one left undecided by
 its time budget), and nothing read from standard input.  The cache is safe to delete; a corrupt
 entry is regenerated and replaced.  ``MECHDERIVE_NO_DISK_CACHE=1`` turns it off with the rest.
+
+:func:`get` and :func:`put` keep other bytes the same way: the command line's scene documents as parsed from
+their TOML (``scene-<SHA-256 of the text>.marshal``, :func:`mechderive.scenes.schema.load_scene`).
 """
 
 from __future__ import annotations
