@@ -134,8 +134,9 @@ def test_a_warm_run_of_a_free_top_scene_imports_no_mpmath():
             "with contextlib.redirect_stdout(out):\n"
             "    main(['run', 'free_top_tumbling', '--json'])\n"
             "report = json.loads(out.getvalue())\n"
-            "print(json.dumps({m: m in sys.modules for m in ('mpmath', 'sympy', 'scipy')}\n"
+            "print(json.dumps({m: m in sys.modules for m in ('mpmath', 'sympy', 'scipy', 'tomllib', 'hashlib')}\n"
             "                 | {'estimate': report['error_estimate']}))\n")
     report = warm_run_report(code)
     assert not report["mpmath"] and not report["sympy"] and not report["scipy"], report
+    assert not report["tomllib"] and not report["hashlib"], report  # the scene's parse and SHA-256: see the heavy top's
     assert 0 < report["estimate"] < 1e-9

@@ -573,3 +573,55 @@ def test_builtin_physics_claims():
     assert scene.initial["omega"] == (1e-6, 1.0, 1e-6)
     cat = builtin.load_builtin("falling_cat")
     assert (cat.t_end, cat.samples, cat.quantities) == (1.0, 201, ("flip_angle", "L1", "L2", "L3"))
+
+
+# --------------------------------------------------------------------------- the parsed TOML kept in the disk cache
+
+def _parsed_entries(root) -> list:
+    return sorted(root.rglob("scene-*.marshal"))
+
+
+def test_the_command_line_s_parse_is_kept_and_read_back_as_tomllib_gave_it(tmp_path, monkeypatch):
+    import tomllib
+
+    monkeypatch.setenv("MECHDERIVE_CACHE_DIR", str(tmp_path))
+    text = HEAVY
+    first = load_scene(text, cached=True)
+    (entry,) = _parsed_entries(tmp_path)
+    monkeypatch.setattr(schema, "_read_toml", lambda *a: pytest.fail("parsed again"))
+    second = load_scene(text, cached=True)
+    assert second == first and second.parameters == first.parameters and second.quantities == first.quantities
+    document = schema._parse_toml(text, "text", True)
+    want = tomllib.loads(text)
+    assert document == want and list(document) == list(want)
+    assert [type(v) for v in document["initial"].values()] == [type(v) for v in want["initial"].values()]
+    # without cached (the library's default), nothing is read or written
+    monkeypatch.undo()
+    monkeypatch.setenv("MECHDERIVE_CACHE_DIR", str(tmp_path / "other"))
+    load_scene(text)
+    assert not _parsed_entries(tmp_path / "other")
+
+
+def test_a_document_that_is_not_plain_data_is_never_kept(tmp_path, monkeypatch):
+    monkeypatch.setenv("MECHDERIVE_CACHE_DIR", str(tmp_path))
+    underflowed = HEAVY.replace("theta_dot = 0.0", "theta_dot = 1e-400")  # 0 in doubles: kept with its text
+    assert type(schema._parse_toml(underflowed, "text", True)["initial"]["theta_dot"]) is schema._Underflowed
+    assert load_scene(underflowed, cached=True).initial["theta_dot"] == 0.0
+    with pytest.raises(InvalidInputError, match="not valid TOML"):
+        load_scene(HEAVY + "[time\n", cached=True)
+    assert schema._parse_toml('when = 1979-05-27\n', "text", True) == {"when": __import__("datetime").date(1979, 5, 27)}
+    assert not _parsed_entries(tmp_path)
+
+
+def test_an_entry_that_does_not_verify_is_parsed_anew_and_replaced(tmp_path, monkeypatch):
+    monkeypatch.setenv("MECHDERIVE_CACHE_DIR", str(tmp_path))
+    load_scene(HEAVY, cached=True)
+    (entry,) = _parsed_entries(tmp_path)
+    import marshal
+
+    forged = marshal.dumps({"system": "heavy_top", "rtol": 0.5})  # another document, its hash not recomputed
+    data = entry.read_bytes()
+    entry.write_bytes(data.split(b"\n", 1)[0] + b"\n" + forged)
+    scene = load_scene(HEAVY, cached=True)
+    assert scene.rtol == 1e-10 and scene.parameters["I1"] == 1.0
+    assert entry.read_bytes() == data

@@ -262,6 +262,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             parser.print_help()
             status = 0
         else:
+            args.own_process = argv is None  # the process ends with this command (the console script, python -m)
             status = int(args.run(args) or 0)
         # A reader that went away shows here rather than in the interpreter's final flush,
         # where it could only be reported as "Exception ignored" with exit status 120.

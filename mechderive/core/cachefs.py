@@ -36,13 +36,25 @@ weaker than the user's home directory.
 from __future__ import annotations
 
 import contextlib
-import hashlib
 import os
 import stat
-from pathlib import Path
-from typing import Iterator, Sequence
+from typing import TYPE_CHECKING, Iterator, Sequence
 
-__all__ = ["directory", "read_file", "write_file", "seal", "unseal", "digest", "MAX_BYTES"]
+if TYPE_CHECKING:  # pragma: no cover
+    from pathlib import Path
+
+__all__ = ["directory", "read_file", "write_file", "seal", "unseal", "digest", "sha256", "MAX_BYTES"]
+
+# SHA-256 as CPython implements it itself (module _sha2 from 3.12, _sha256 before), the implementation hashlib
+# falls back to: hashlib's own constructors load OpenSSL's libcrypto, ~5 ms of every warm run for hashing a few
+# kB.  The digests are the same; hashlib where neither module was built.
+try:
+    from _sha2 import sha256
+except ImportError:  # pragma: no cover - Python < 3.12
+    try:
+        from _sha256 import sha256
+    except ImportError:
+        from hashlib import sha256
 
 #: Largest artifact read from the cache (generated sources are ~0.2–30 kB, libraries ~30 kB).
 MAX_BYTES = 64 * 2**20
@@ -57,7 +69,19 @@ _WARNED: set[str] = set()
 _SUPPORTED = hasattr(os, "geteuid") and {os.open, os.mkdir, os.rename, os.unlink, os.stat} <= os.supports_dir_fd
 
 
-def _refuse(root: Path, folder: Path, why: str) -> None:
+def _normalized(root: str | os.PathLike) -> str:
+    """``str(pathlib.Path(root))`` without importing pathlib (~6 ms of a warm run): :func:`os.path.normpath`'s
+    result, which is the same (repeated and trailing separators and ``.`` dropped) except that it also folds
+    ``a/..``, not the same folder when ``a`` is a symbolic link: a root with ``..`` goes through pathlib."""
+    text = os.fspath(root)
+    if ".." in text.split(os.sep):
+        from pathlib import Path
+
+        return str(Path(text))
+    return os.path.normpath(text)
+
+
+def _refuse(root: str, folder: str, why: str) -> None:
     """The one warning line for a refused cache folder (the run goes on without the disk cache)."""
     key = str(root)
     if key in _WARNED:
@@ -81,15 +105,16 @@ def _unsafe(st: os.stat_result) -> str | None:
     return None
 
 
-def _make_root(root: Path) -> bool:
-    """Create ``root`` and its missing parents with mode 0700; False if it cannot be (read-only …)."""
+def _make_root(root: str) -> bool:
+    """Create ``root`` (normalized) and its missing parents with mode 0700; False if it cannot be (read-only …)."""
     missing = []
     path = root
     while not os.path.lexists(path):
         missing.append(path)
-        if path.parent == path:
+        parent = os.path.dirname(path) or os.curdir  # what pathlib's parent is
+        if parent == path:
             break
-        path = path.parent
+        path = parent
     try:
         for p in reversed(missing):
             with contextlib.suppress(FileExistsError):  # another process made it meanwhile
@@ -99,7 +124,7 @@ def _make_root(root: Path) -> bool:
     return True
 
 
-def _open_root(root: Path, create: bool) -> int | None:
+def _open_root(root: str, create: bool) -> int | None:
     try:
         link = os.lstat(root)
     except FileNotFoundError:
@@ -126,7 +151,7 @@ def _open_root(root: Path, create: bool) -> int | None:
     return fd
 
 
-def _open_child(root: Path, path: Path, parent: int, name: str, create: bool) -> int | None:
+def _open_child(root: str, path: str, parent: int, name: str, create: bool) -> int | None:
     if create:
         with contextlib.suppress(OSError):  # exists already, or read-only: opening tells which
             os.mkdir(name, 0o700, dir_fd=parent)
@@ -140,31 +165,31 @@ def _open_child(root: Path, path: Path, parent: int, name: str, create: bool) ->
         except OSError:
             link = False
         why = "is a symbolic link" if link else f"cannot be opened as a folder ({exc.strerror})"
-        _refuse(root, path / name, why)
+        _refuse(root, os.path.join(path, name), why)
         return None
     why = _unsafe(os.fstat(fd))
     if why is not None:
         os.close(fd)
-        _refuse(root, path / name, why)
+        _refuse(root, os.path.join(path, name), why)
         return None
     return fd
 
 
 @contextlib.contextmanager
-def directory(root: Path, parts: Sequence[str], *, create: bool) -> Iterator[int | None]:
+def directory(root: str | Path, parts: Sequence[str], *, create: bool) -> Iterator[int | None]:
     """A descriptor of the checked folder ``root/parts[0]/parts[1]/…``, or None (no disk cache).
 
     With ``create``, missing folders are made (mode 0700).  None when a folder is refused (one
     warning per process, see the module docstring) or is missing and cannot be made.
     """
-    fd = _open_root(Path(root), create) if _SUPPORTED else None
-    path = Path(root)
+    path = root = _normalized(root)
+    fd = _open_root(root, create) if _SUPPORTED else None
     for name in parts:
         if fd is None:
             break
-        child = _open_child(Path(root), path, fd, name, create)
+        child = _open_child(root, path, fd, name, create)
         os.close(fd)
-        fd, path = child, path / name
+        fd, path = child, os.path.join(path, name)
     try:
         yield fd
     finally:
@@ -231,7 +256,7 @@ def write_file(folder: int, name: str, data: bytes) -> bool:
 def digest(key: str, payload: bytes) -> str:
     """SHA-256 (hex) of ``key`` and ``payload``: binding the name means a file copied under another
     name does not verify."""
-    return hashlib.sha256(key.encode() + b"\0" + payload).hexdigest()
+    return sha256(key.encode() + b"\0" + payload).hexdigest()
 
 
 def seal(key: str, payload: bytes) -> bytes:

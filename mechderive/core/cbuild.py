@@ -29,23 +29,24 @@ library:
 
 from __future__ import annotations
 
+import _thread
 import ctypes
-import hashlib
 import os
-import threading
 import time
-from pathlib import Path
-from typing import Callable
+from typing import TYPE_CHECKING, Callable
 
 from ..errors import MechDeriveError
 from . import cachefs, codecache
+
+if TYPE_CHECKING:  # pragma: no cover
+    from pathlib import Path
 
 __all__ = ["compiler", "c_enabled", "set_c_enabled", "load_library", "load_or_none", "why_unavailable", "CBuildError",
            "build_log", "clear_memory"]
 
 _FLAGS = ("-O2", "-fPIC", "-shared")
 _MEMORY: dict[str, ctypes.CDLL] = {}
-_LOCK = threading.Lock()
+_LOCK = _thread.allocate_lock()  # threading.Lock(), without importing threading on every run
 _ENABLED: list[bool | None] = [None]
 #: The in-memory files the libraries were loaded from (see _open_bytes), open for the process.
 _FDS: list[int] = []
@@ -107,18 +108,20 @@ def _library_name(name: str) -> str:
     import platform
 
     cc = compiler() or "none"
-    tag = hashlib.sha256(f"{platform.machine()}|{platform.system()}|{cc}|{' '.join(_FLAGS)}".encode()).hexdigest()[:12]
+    tag = cachefs.sha256(f"{platform.machine()}|{platform.system()}|{cc}|{' '.join(_FLAGS)}".encode()).hexdigest()[:12]
     safe = "".join(c if c.isalnum() or c in "._-" else "_" for c in name)
     return f"{safe}-{tag}.so"
 
 
 def _library_path(name: str) -> Path:
     """Where the library ``name`` is kept in the disk cache (for reading; loads go through :mod:`.cachefs`)."""
-    return codecache.cache_dir() / codecache.fingerprint() / "c" / _library_name(name)
+    from pathlib import Path
+
+    return Path(codecache._root()) / codecache.fingerprint() / "c" / _library_name(name)
 
 
 def _cache_folder(create: bool):  # -> context manager of a checked folder descriptor or None
-    return cachefs.directory(codecache.cache_dir(), (codecache.fingerprint(), "c"), create=create)
+    return cachefs.directory(codecache._root(), (codecache.fingerprint(), "c"), create=create)
 
 
 def _compile(source: str, file: str) -> bytes:
@@ -129,6 +132,7 @@ def _compile(source: str, file: str) -> bytes:
     """
     import subprocess
     import tempfile
+    from pathlib import Path
 
     cc = compiler()
     if cc is None:  # pragma: no cover - callers check c_enabled() first
@@ -175,6 +179,7 @@ def _open_bytes(data: bytes, file: str) -> ctypes.CDLL:
             return lib
         os.close(fd)  # try the private copy; a library the system rejects fails there too
     import tempfile
+    from pathlib import Path
 
     with tempfile.TemporaryDirectory(prefix="mechderive-c-", ignore_cleanup_errors=True) as tmp:
         copy = Path(tmp) / file

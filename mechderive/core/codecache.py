@@ -36,27 +36,26 @@ Location: ``$MECHDERIVE_CACHE_DIR``, else ``$XDG_CACHE_HOME/mechderive``, else
 
 from __future__ import annotations
 
-import contextlib
+import _thread
 import functools
-import hashlib
 import importlib
-import inspect
 import os
 import sys
-import threading
 import time
-from pathlib import Path
-from typing import Any, Callable, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Sequence
 
 from ..errors import InvalidInputError
 from . import cachefs
+
+if TYPE_CHECKING:  # pragma: no cover
+    from pathlib import Path
 
 __all__ = ["cached_lambdify", "cache_dir", "fingerprint", "set_disk_cache", "disk_cache_enabled",
            "compile_log", "clear_memory"]
 
 _MODULES = ("numpy", "mpmath", "math")
 _MEMORY: dict[str, tuple[Callable[..., Any], dict]] = {}
-_LOCK = threading.Lock()
+_LOCK = _thread.allocate_lock()  # threading.Lock() itself, without importing threading (~1 ms of a warm run)
 _ENABLED: list[bool | None] = [None]
 #: (name, how, seconds) for every function obtained in this process, in order; how is "compiled"
 #: or "disk" (loaded from the disk cache); seconds exclude the derivation the builder ran.
@@ -83,11 +82,19 @@ def disk_cache_enabled() -> bool:
 
 def cache_dir() -> Path:
     """The root of the disk cache (see the module docstring)."""
+    from pathlib import Path
+
+    return Path(_root())
+
+
+def _root() -> str:
+    """:func:`cache_dir` as a string, without importing pathlib (~6 ms of a warm run; :mod:`.cachefs` normalizes
+    it as pathlib would)."""
     env = os.environ.get("MECHDERIVE_CACHE_DIR")
     if env:
-        return Path(env)
+        return env
     xdg = os.environ.get("XDG_CACHE_HOME")
-    return (Path(xdg) if xdg else Path.home() / ".cache") / "mechderive"
+    return os.path.join(xdg if xdg else os.path.join(os.path.expanduser("~"), ".cache"), "mechderive")
 
 
 def _version(dist: str) -> str:
@@ -114,8 +121,8 @@ def fingerprint() -> str:
 
     Reading and hashing every source file took ~8 ms of each warm run.  So the hash is recorded in the
     cache root (``stamps/``, sealed as the code is) under a *stamp* of the same files' paths, sizes,
-    modification times (ns) and inodes and of the versions (~2 ms to take): a later process with the
-    same stamp reads the recorded fingerprint instead of the files — the trust Python's own bytecode
+    modification and change times (ns) and inodes and of the versions (~2 ms to take): a later process with
+    the same stamp reads the recorded fingerprint instead of the files — more than the trust Python's own bytecode
     cache puts in a source's size and modification time.  Any edit, checkout or install (the folders on
     ``sys.path`` change) changes the stamp, and the fingerprint is computed from the bytes again.
     """
@@ -143,12 +150,14 @@ def fingerprint() -> str:
             installs.append((entry, os.stat(entry or ".").st_mtime_ns))
         except OSError:
             installs.append((entry, None))
-    stamp = hashlib.sha256(repr(([(rel, st.st_size, st.st_mtime_ns, st.st_ino) for rel, st in files],
+    # the change time too: an edit that keeps the size and sets the modification time back (cp -p, tar, rsync -t,
+    # touch -r over a file rewritten in place) still changes it, and no program can set it
+    stamp = cachefs.sha256(repr(([(rel, st.st_size, st.st_mtime_ns, st.st_ctime_ns, st.st_ino) for rel, st in files],
                                  sys.version, installs)).encode()).hexdigest()[:32]
     recorded = _stamped(stamp)
     if recorded is not None:
         return recorded
-    h = hashlib.sha256()
+    h = cachefs.sha256()
     for rel, _ in files:
         h.update(rel.encode())
         with open(os.path.join(root, rel), "rb") as fh:
@@ -166,7 +175,7 @@ def _stamped(stamp: str, value: str | None = None) -> str | None:
     if not disk_cache_enabled():
         return None
     name = f"{stamp}.fingerprint"
-    with cachefs.directory(cache_dir(), ("stamps",), create=value is not None) as folder:
+    with cachefs.directory(_root(), ("stamps",), create=value is not None) as folder:
         if folder is None:
             return None
         if value is not None:
@@ -189,15 +198,15 @@ def _file_name(name: str, module: str) -> str:
     return f"{safe}.{module}.py"
 
 
-def _path(name: str, module: str) -> Path:
+def _path(name: str, module: str) -> str:
     """Where the source of ``name`` for ``module`` is kept (for reading; loads go through :mod:`.cachefs`)."""
-    return cache_dir() / fingerprint() / _file_name(name, module)
+    return os.path.join(_root(), fingerprint(), _file_name(name, module))
 
 
 def _load(name: str, module: str) -> tuple[Callable[..., Any], dict] | None:
     """The cached function, or None when it is absent or does not verify (then it is rebuilt)."""
     file = _file_name(name, module)
-    with cachefs.directory(cache_dir(), (fingerprint(),), create=False) as folder:
+    with cachefs.directory(_root(), (fingerprint(),), create=False) as folder:
         if folder is None:
             return None
         source = cachefs.unseal(file, cachefs.read_file(folder, file))
@@ -227,7 +236,7 @@ def _code(folder: int, file: str, source: bytes, text: str) -> Any:
     import marshal
 
     compiled = file + ".marshal"
-    key = f"{compiled}|{hashlib.sha256(source).hexdigest()}"
+    key = f"{compiled}|{cachefs.sha256(source).hexdigest()}"
     payload = cachefs.unseal(key, cachefs.read_file(folder, compiled))
     if payload is not None:
         try:
@@ -236,7 +245,7 @@ def _code(folder: int, file: str, source: bytes, text: str) -> Any:
                 return code
         except (ValueError, EOFError, TypeError):  # pragma: no cover - verified, so ours
             pass
-    code = compile(text, str(cache_dir() / fingerprint() / file), "exec")
+    code = compile(text, os.path.join(_root(), fingerprint(), file), "exec")
     cachefs.write_file(folder, compiled, cachefs.seal(key, marshal.dumps(code)))  # a read-only cache: no bytecode kept
     return code
 
@@ -245,7 +254,7 @@ def _store(name: str, module: str, source: str, meta: dict) -> None:
     file = _file_name(name, module)
     header = "".join(f"# meta {k} = {v}\n" for k, v in meta.items())
     text = "# generated by mechderive.core.codecache from sympy.lambdify; safe to delete\n" + header + source
-    with cachefs.directory(cache_dir(), (fingerprint(),), create=True) as folder:
+    with cachefs.directory(_root(), (fingerprint(),), create=True) as folder:
         if folder is not None:  # a refused or read-only cache just means no disk cache
             cachefs.write_file(folder, file, cachefs.seal(file, text.encode("utf-8")))
 
@@ -275,11 +284,15 @@ def prefetch(jobs: Sequence[tuple[str, Callable[[], tuple[Sequence[Any], Any]], 
     more CPU than the second core gave back.  It must derive only what this process's request needs anyway.
     """
     if (not hasattr(os, "fork") or not disk_cache_enabled() or (os.cpu_count() or 1) < 2
-            or threading.active_count() > 1 or os.environ.get("MECHDERIVE_PARALLEL", "1") == "0"):
+            or os.environ.get("MECHDERIVE_PARALLEL", "1") == "0"):
         return False
     todo = [(n, b, m) for n, b, m in jobs if f"{n}|{m}" not in _MEMORY and f"{n}|{m}" not in _PREFETCH
-            and not _path(n, m).exists()]
-    if not todo:
+            and not os.path.exists(_path(n, m))]
+    if not todo:  # (a warm run: decided before importing threading, ~1 ms)
+        return False
+    import threading
+
+    if threading.active_count() > 1:
         return False
     if prepare is not None:
         prepare()
@@ -301,13 +314,13 @@ def prefetch(jobs: Sequence[tuple[str, Callable[[], tuple[Sequence[Any], Any]], 
     return True
 
 
-def _wait_for(pid: int, published: Path | None = None) -> None:
+def _wait_for(pid: int, published: str | None = None) -> None:
     """Wait for the prefetching child ``pid`` until it has published ``published`` (it builds its jobs in
     turn, atomically each: the first ones are ready before the last are done) or has exited (reaped once;
     later waits return at once), at most PREFETCH_WAIT s."""
     deadline = time.monotonic() + PREFETCH_WAIT
     while True:
-        if published is not None and published.exists():
+        if published is not None and os.path.exists(published):
             return
         try:
             done, _ = os.waitpid(pid, os.WNOHANG)
@@ -316,6 +329,8 @@ def _wait_for(pid: int, published: Path | None = None) -> None:
         if done:
             return
         if time.monotonic() > deadline:
+            import contextlib
+
             with contextlib.suppress(OSError):
                 os.kill(pid, 9)
                 os.waitpid(pid, 0)
@@ -372,6 +387,8 @@ def cached_lambdify(name: str, build: Callable[[], tuple[Sequence[Any], Any]], *
         func = sp.lambdify(list(args), flat, modules=importlib.import_module(module), cse=True)
         meta = {"shape": ",".join(map(str, shape)), "args": ",".join(str(a) for a in args)}
         if disk:
+            import inspect
+
             _store(name, module, inspect.getsource(func), meta)
         loaded, how = (func, meta), "compiled"
     with _LOCK:

@@ -11,8 +11,7 @@ compile twice.  The generated function's docstring lists the argument order.
 
 from __future__ import annotations
 
-import hashlib
-import threading
+import _thread
 from typing import Any, Callable, Sequence
 
 import numpy as np
@@ -22,7 +21,7 @@ from ..errors import ArgumentError
 __all__ = ["compile_expressions", "compile_cached", "compile_scalar", "compile_cache_info", "clear_compile_cache"]
 
 _CACHE: dict[str, Callable[..., Any]] = {}
-_LOCK = threading.Lock()
+_LOCK = _thread.allocate_lock()  # threading.Lock(), without importing threading on every run
 _STATS = {"hits": 0, "misses": 0}
 
 
@@ -30,6 +29,8 @@ def _key(exprs: Any, args: Sequence[Any]) -> str:
     import sympy as sp
 
     text = sp.srepr(exprs) + "|" + sp.srepr(tuple(args))
+    import hashlib
+
     return hashlib.sha256(text.encode()).hexdigest()
 
 

@@ -11,17 +11,18 @@ Only answers that cannot change are kept: the built-in systems (a system registe
 be a different one under the same name next time), finished verdicts (never one left undecided by
 its time budget), and nothing read from standard input.  The cache is safe to delete; a corrupt
 entry is regenerated and replaced.  ``MECHDERIVE_NO_DISK_CACHE=1`` turns it off with the rest.
+
+:func:`get` and :func:`put` keep other bytes the same way: the command line's scene documents as parsed from
+their TOML (``scene-<SHA-256 of the text>.marshal``, :func:`mechderive.scenes.schema.load_scene`).
 """
 
 from __future__ import annotations
 
-import hashlib
-import json
 from typing import Any, Sequence
 
 from . import cachefs, codecache
 
-__all__ = ["key", "lookup", "store"]
+__all__ = ["key", "lookup", "store", "get", "put"]
 
 _FOLDER = "text"
 _LIMIT = 16 * 2**20
@@ -29,23 +30,41 @@ _LIMIT = 16 * 2**20
 
 def key(kind: str, parts: Sequence[Any]) -> str:
     """The entry name of the command ``kind`` with these ``parts`` (arguments, file contents as bytes)."""
-    h = hashlib.sha256(kind.encode())
+    import json
+
+    h = cachefs.sha256(kind.encode())
     for part in parts:
         data = part if isinstance(part, bytes) else json.dumps(part, sort_keys=True, default=repr).encode()
         h.update(len(data).to_bytes(8, "little") + data)
     return f"{kind}-{h.hexdigest()[:40]}.json"
 
 
-def lookup(name: str) -> tuple[str, int] | None:
-    """(stdout text, exit status) stored under ``name``, or None."""
+def get(name: str) -> bytes | None:
+    """The bytes stored under ``name`` (verified: see :mod:`.cachefs`), or None."""
     if not codecache.disk_cache_enabled():
         return None
-    with cachefs.directory(codecache.cache_dir(), (codecache.fingerprint(), _FOLDER), create=False) as folder:
+    with cachefs.directory(codecache._root(), (codecache.fingerprint(), _FOLDER), create=False) as folder:
         if folder is None:
             return None
-        payload = cachefs.unseal(name, cachefs.read_file(folder, name, limit=_LIMIT))
+        return cachefs.unseal(name, cachefs.read_file(folder, name, limit=_LIMIT))
+
+
+def put(name: str, payload: bytes) -> None:
+    """Keep ``payload`` under ``name`` (silently nothing where there is no disk cache, or it is too long)."""
+    if not codecache.disk_cache_enabled() or len(payload) > _LIMIT:
+        return
+    with cachefs.directory(codecache._root(), (codecache.fingerprint(), _FOLDER), create=True) as folder:
+        if folder is not None:
+            cachefs.write_file(folder, name, cachefs.seal(name, payload))
+
+
+def lookup(name: str) -> tuple[str, int] | None:
+    """(stdout text, exit status) stored under ``name``, or None."""
+    payload = get(name)
     if payload is None:
         return None
+    import json
+
     try:
         entry = json.loads(payload.decode("utf-8"))
         return str(entry["stdout"]), int(entry["status"])
@@ -55,11 +74,6 @@ def lookup(name: str) -> tuple[str, int] | None:
 
 def store(name: str, stdout: str, status: int) -> None:
     """Keep ``stdout`` and ``status`` under ``name`` (silently nothing where there is no disk cache)."""
-    if not codecache.disk_cache_enabled():
-        return
-    payload = json.dumps({"stdout": stdout, "status": status}).encode("utf-8")
-    if len(payload) > _LIMIT:
-        return
-    with cachefs.directory(codecache.cache_dir(), (codecache.fingerprint(), _FOLDER), create=True) as folder:
-        if folder is not None:
-            cachefs.write_file(folder, name, cachefs.seal(name, payload))
+    import json
+
+    put(name, json.dumps({"stdout": stdout, "status": status}).encode("utf-8"))

@@ -22,7 +22,7 @@ from ..errors import InvalidInputError
 from ..systems import registry
 from .schema import Scene, load_scene
 
-__all__ = ["list_scenes", "scene_text", "load_builtin", "DEFAULT"]
+__all__ = ["list_scenes", "scene_text", "find_builtin", "load_builtin", "DEFAULT"]
 
 #: The scene ``mechderive run`` runs when given none.
 DEFAULT = "default"
@@ -56,13 +56,26 @@ def scene_text(name: str) -> str:
     ...
     mechderive.errors.InvalidInputError: unknown built-in scene 'nope': expected one of default, ...
     """
+    text = find_builtin(name)
+    if text is None:
+        raise InvalidInputError(f"unknown built-in scene {name!r}: expected one of {', '.join(_all())}")
+    return text
+
+
+def find_builtin(name: str) -> str | None:
+    """The TOML text of the built-in scene ``name``, or None if there is none of that name.
+
+    Systems are asked in the registry's order until one has it: a free top's scene imports no other
+    system (listing every scene, as the message of an unknown name does, imports them all).
+    """
     if isinstance(name, str):
         for found, _, text in _scenes():
             if found == name:
                 return text
-    raise InvalidInputError(f"unknown built-in scene {name!r}: expected one of {', '.join(_all())}")
+    return None
 
 
-def load_builtin(name: str) -> Scene:
-    """The built-in scene ``name``, parsed and checked, with ``Scene.name == name``."""
-    return load_scene(scene_text(name), name=name)
+def load_builtin(name: str, *, cached: bool = False) -> Scene:
+    """The built-in scene ``name``, parsed and checked, with ``Scene.name == name`` (``cached``: see
+    :func:`~.schema.load_scene`)."""
+    return load_scene(scene_text(name), name=name, cached=cached)

@@ -95,17 +95,15 @@ from __future__ import annotations
 import math
 import os
 import re
-import secrets
 import stat
 import sys
-import tomllib
 from collections.abc import Mapping
-from dataclasses import dataclass, field
-from pathlib import Path
-from typing import Any, Iterable
+from dataclasses import field
+from typing import TYPE_CHECKING, Any, Iterable
 
 import numpy as np
 
+from ..core.records import Frozen, record
 from ..errors import InvalidInputError
 from ..systems import registry
 from ..systems.base import Key, Quantity, System
@@ -120,6 +118,9 @@ from ..systems.scene_keys import key_name as _key_name
 from ..systems.scene_keys import number as _number
 from ..systems.scene_keys import one_of as _one_of
 from ..systems.scene_keys import show as _show
+
+if TYPE_CHECKING:  # pragma: no cover
+    from pathlib import Path
 
 __all__ = [
     "Scene",
@@ -294,8 +295,8 @@ def _gigabytes(n: float) -> str:
     return f"{n / 1e9:.3g} GB" if n >= 1e8 else f"{n / 1e6:.3g} MB"
 
 
-@dataclass(frozen=True)
-class SizeEstimate:
+@record
+class SizeEstimate(Frozen):
     """What a scene's run will take, estimated from its system, samples and quantities before solving.
 
     ``columns`` counts ``t`` and the quantities; ``values = samples × columns``.  ``table_bytes``
@@ -310,6 +311,11 @@ class SizeEstimate:
     table_bytes: int
     csv_bytes: int
     memory_bytes: int
+
+    def __init__(self, samples: int, columns: int, values: int, table_bytes: int, csv_bytes: int,
+                 memory_bytes: int) -> None:
+        self.__dict__.update(samples=samples, columns=columns, values=values, table_bytes=table_bytes,
+                             csv_bytes=csv_bytes, memory_bytes=memory_bytes)
 
     @classmethod
     def of(cls, system: str, samples: int, quantities: int) -> "SizeEstimate":
@@ -340,8 +346,8 @@ def _check_size(scene: "Scene") -> None:
 
 # ----------------------------------------------------------------------------- the scene
 
-@dataclass(frozen=True)
-class Scene:
+@record
+class Scene(Frozen):
     """One checked scene.  Constructing it validates and normalises every field.
 
     The system (:mod:`mechderive.systems.registry`) checks its own ``parameters`` and ``initial``
@@ -378,6 +384,21 @@ class Scene:
     samples_per_period: int | None = None
     #: the concrete system (:class:`~mechderive.systems.base.System`) this scene runs, set on construction
     model: Any = field(default=None, compare=False, repr=False)
+
+    def __init__(self, system: str, method: str, rtol: float, parameters: dict, initial: dict, t_end: float,
+                 samples: int, quantities: tuple, name: str | None = None, strict: bool = DEFAULT_STRICT,
+                 definition: Mapping[str, Any] | None = None, summary: tuple = (),
+                 output_units: Mapping[str, str] | None = None, given_with_units: Mapping[str, str] | None = None,
+                 t_start: float = 0.0, times_given: tuple | None = None, samples_per_period: int | None = None,
+                 model: Any = None) -> None:
+        self.__dict__.update(
+            system=system, method=method, rtol=rtol, parameters=parameters, initial=initial, t_end=t_end,
+            samples=samples, quantities=quantities, name=name, strict=strict,
+            definition={} if definition is None else definition, summary=summary,
+            output_units={} if output_units is None else output_units,
+            given_with_units={} if given_with_units is None else given_with_units, t_start=t_start,
+            times_given=times_given, samples_per_period=samples_per_period, model=model)
+        self.__post_init__()
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -642,13 +663,56 @@ def _parse_float(text: str) -> Any:
     return x
 
 
-def _parse_toml(text: str, source: str) -> dict[str, Any]:
+def _parse_toml(text: str, source: str, cached: bool = False) -> dict[str, Any]:
+    """:func:`_read_toml` of ``text``; with ``cached``, what it gave for the very same text in an earlier process.
+
+    A document of plain values (tables, arrays, strings, integers, floats, booleans) is kept in the disk cache
+    (:mod:`mechderive.core.textcache`, under the fingerprint of the package and the Python version, so of
+    this tomllib), named by the SHA-256 of the text, as :mod:`marshal` data: reading it back skips importing
+    tomllib (its regular expressions: ~3 ms of a warm run) and parsing.  Anything else (a date, a number no
+    double holds, an error) is read anew each time.
+    """
+    if not cached:
+        return _read_toml(text, source)
+    import marshal
+
+    from ..core import cachefs, textcache
+
+    name = f"scene-{cachefs.sha256(text.encode('utf-8', 'surrogatepass')).hexdigest()[:40]}.marshal"
+    stored = textcache.get(name)
+    if stored is not None:
+        try:
+            document = marshal.loads(stored)
+        except (EOFError, ValueError, TypeError):  # pragma: no cover - sealed, so written by us
+            document = None
+        if type(document) is dict and _plain(document):
+            return document
+    document = _read_toml(text, source)
+    if _plain(document):
+        textcache.put(name, marshal.dumps(document))
+    return document
+
+
+def _plain(value: Any) -> bool:
+    """Whether ``value`` is made of dicts with str keys, lists, str, int, float and bool only (what marshal
+    gives back as it was: not a float subclass such as :class:`_Underflowed`, nor a date)."""
+    kind = type(value)
+    if kind is dict:
+        return all(type(k) is str and _plain(v) for k, v in value.items())
+    if kind is list:
+        return all(_plain(v) for v in value)
+    return kind in (str, int, float, bool)
+
+
+def _read_toml(text: str, source: str) -> dict[str, Any]:
     """``tomllib.loads`` with every failure an :class:`InvalidInputError` saying where it is.
 
     Python refuses to convert an integer of more than ``sys.get_int_max_str_digits()`` (4300)
     digits to an int; those (which no double holds either) are read as :class:`_Unrepresentable`
     so that the check of their key refuses them by name.
     """
+    import tomllib
+
     try:
         try:
             return tomllib.loads(text, parse_float=_parse_float)
@@ -656,6 +720,8 @@ def _parse_toml(text: str, source: str) -> dict[str, Any]:
             raise
         except ValueError:
             limit = sys.get_int_max_str_digits()
+            import secrets  # (with pathlib, ~10 ms of a warm run when imported at the top)
+
             nonce = "".join(secrets.choice("0123456789") for _ in range(18))
             huge: dict[str, str] = {}
 
@@ -683,7 +749,7 @@ def _parse_toml(text: str, source: str) -> dict[str, Any]:
         raise InvalidInputError(f"scene {source}: not valid TOML: {str(exc).splitlines()[0]}") from None
 
 
-def load_scene(path_or_text: os.PathLike | str, *, name: str | None = None) -> Scene:
+def load_scene(path_or_text: os.PathLike | str, *, name: str | None = None, cached: bool = False) -> Scene:
     """Read a scene from a file (a :class:`pathlib.Path`) or from TOML text (a ``str``).
 
     A file's scene is named after the file's stem (if that is a valid name) unless it has a
@@ -691,6 +757,9 @@ def load_scene(path_or_text: os.PathLike | str, *, name: str | None = None) -> S
     directory) of at most :data:`MAX_SCENE_BYTES` bytes of UTF-8 text.  TOML syntax errors, files
     that cannot be read and numbers no double holds become
     :class:`~mechderive.errors.InvalidInputError` naming the file, the line or the key.
+    ``cached``: the parsed TOML is kept in the disk cache, by the text's hash, and read back from it
+    (the command line's runs: a warm one imports no TOML parser; see :func:`_parse_toml`); the scene is
+    checked all the same.
 
     >>> load_scene('system = "heavy_top"\\nsamples = 5')
     Traceback (most recent call last):
@@ -700,6 +769,8 @@ method, rtol, strict and tables [parameters], [initial], [time], [output]
     """
     default_name = None
     if isinstance(path_or_text, os.PathLike):
+        from pathlib import Path
+
         path = Path(path_or_text)
         source = f"file {str(path)!r}"
         text = _read_file(path, source)
@@ -714,7 +785,7 @@ method, rtol, strict and tables [parameters], [initial], [time], [output]
             raise InvalidInputError(f"scene text: expected at most {MAX_SCENE_BYTES} characters, got {len(text)}")
     else:
         raise InvalidInputError(f"scene: expected a pathlib.Path or TOML text (a str), got {_show(path_or_text)}")
-    document = _parse_toml(text, source)
+    document = _parse_toml(text, source, cached)
     if name is None and "name" not in document:
         name = default_name
     return parse_scene(document, name=name)

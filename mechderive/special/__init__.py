@@ -27,25 +27,35 @@ dn = k' = √m1, both to full relative accuracy:
 
 from __future__ import annotations
 
-from .integrals import (
-    ellipk_m1,
-    elliptic_e,
-    elliptic_e_incomplete,
-    elliptic_f,
-    elliptic_pi,
-    elliptic_pi_incomplete,
-    pi_of_am,
-)
-from .jacobi import jacobi_am, jacobi_sn_cn_dn
+import importlib
+from typing import Any
 
-__all__ = [
-    "jacobi_sn_cn_dn",
-    "jacobi_am",
-    "ellipk_m1",
-    "elliptic_e",
-    "elliptic_f",
-    "elliptic_e_incomplete",
-    "elliptic_pi",
-    "elliptic_pi_incomplete",
-    "pi_of_am",
-]
+#: public name -> the module that defines it, imported on first use: the closed forms import the private
+#: modules they need (``_doubledouble``, ``_sncndn``, ...), which runs this file first; importing every
+#: function here made a warm run load the incomplete integrals it does not use
+_PUBLIC = {
+    "jacobi_sn_cn_dn": "jacobi",
+    "jacobi_am": "jacobi",
+    "ellipk_m1": "integrals",
+    "elliptic_e": "integrals",
+    "elliptic_f": "integrals",
+    "elliptic_e_incomplete": "integrals",
+    "elliptic_pi": "integrals",
+    "elliptic_pi_incomplete": "integrals",
+    "pi_of_am": "integrals",
+}
+
+__all__ = list(_PUBLIC)
+
+
+def __getattr__(name: str) -> Any:
+    module = _PUBLIC.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_PUBLIC))

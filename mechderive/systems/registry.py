@@ -11,8 +11,8 @@ True
 
 from __future__ import annotations
 
+import _thread
 import importlib
-import threading
 
 from ..errors import InvalidInputError
 from .base import System
@@ -28,7 +28,7 @@ _BUILTIN = {
     "lagrangian": "mechderive.systems.lagrangian.system",
 }
 
-_LOCK = threading.Lock()
+_LOCK = _thread.allocate_lock()  # threading.Lock(), without importing threading on every run
 _LOADED: dict[str, System] = {}
 
 

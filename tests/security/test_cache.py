@@ -24,6 +24,7 @@ import shutil
 import signal
 import stat
 import subprocess
+import sys
 import tempfile
 import textwrap
 from pathlib import Path
@@ -541,3 +542,48 @@ def test_a_read_only_cache_is_still_read(c_cache, monkeypatch):
     _replace(c_cache, b"")
     assert _answer().md_answer() == 42 and cbuild.build_log()[-1][:2] == ("sec_answer", "built")
     assert c_cache.read_bytes() == b""  # not replaced, not loaded
+
+
+# --- the fingerprint: a changed source file never loads code compiled from the old one ----------------------------
+
+_FINGERPRINT = ("import sys; from mechderive.core import codecache; "
+                "print(codecache.fingerprint(), sorted(sys.modules).count('hashlib'), codecache.__file__)")
+
+
+def test_a_changed_source_file_changes_the_fingerprint_whatever_its_times(tmp_path):
+    """The fingerprint is recorded under a stamp of the files' sizes, times and inodes (not their bytes, ~8 ms to
+    hash): an edit of the same size with its modification time set back, or a new file, must change it all the
+    same, and a stamp seen before gives the fingerprint of the bytes, never another's."""
+    package = tmp_path / "src" / "mechderive"
+    shutil.copytree(Path(codecache.__file__).resolve().parents[1], package,
+                    ignore=shutil.ignore_patterns("__pycache__"))
+    env = {**os.environ, "PYTHONPATH": str(package.parent), "MECHDERIVE_CACHE_DIR": str(tmp_path / "cache")}
+
+    def fingerprint() -> str:  # (not run_python: it puts the repository's package first on the path)
+        out = subprocess.run([sys.executable, "-c", _FINGERPRINT], env=env, cwd=tmp_path, capture_output=True,
+                             text=True, timeout=120)
+        assert out.returncode == 0, out.stderr
+        value, hashlib_imported, where = out.stdout.split()
+        assert where == str(package / "core" / "codecache.py")
+        assert hashlib_imported == "0"  # (CPython's own SHA-256: OpenSSL's load is ~5 ms of a warm run)
+        return value
+
+    first = fingerprint()
+    assert list((tmp_path / "cache" / "stamps").iterdir()) and fingerprint() == first  # recorded, read back
+    target = package / "systems" / "heavy_top" / "model.py"
+    st = target.stat()
+    text = target.read_bytes()
+    edited = text.replace(b"import", b"imporT", 1)
+    assert len(edited) == len(text) and edited != text
+    with open(target, "r+b") as fh:  # in place: same inode, same size
+        fh.write(edited)
+    os.utime(target, ns=(st.st_atime_ns, st.st_mtime_ns))  # the modification time set back
+    assert target.stat().st_mtime_ns == st.st_mtime_ns and target.stat().st_ino == st.st_ino
+    second = fingerprint()
+    assert second != first
+    (package / "extra.py").write_text("# a new module\n")
+    third = fingerprint()
+    assert third not in (first, second)
+    (package / "extra.py").unlink()
+    target.write_bytes(text)
+    assert fingerprint() == first  # the same bytes: the same fingerprint (and the code compiled from them)

@@ -53,7 +53,6 @@ from __future__ import annotations
 
 import functools
 import math
-from dataclasses import dataclass
 from typing import Any, Mapping
 
 import numpy as np
@@ -63,6 +62,7 @@ from ...errors import DerivationError, InvalidInputError
 from ...core.codecache import cached_lambdify
 from ...kinematics.rotations import angular_velocity_body, rotation_matrix
 from ...core.phase import DD, mod_two_pi
+from ...core.records import Frozen, record
 from ...special._doubledouble import dd_add, two_prod
 from .parameters import check_initial, check_params
 
@@ -201,8 +201,8 @@ def _rates_build():
     return [hm.I1, hm.I3, dm, dp, x, y], [phi_dot, psi_dot, *half]
 
 
-@dataclass(frozen=True)
-class _Angle:
+@record
+class _Angle(Frozen):
     """The closed form of one precession-type angle: start, linear part, Π terms, advance per period."""
 
     name: str
@@ -211,6 +211,11 @@ class _Angle:
     terms: tuple[tuple[float, float, float], ...]  # (c_i/κ, n_i, Π(n_i; am v0 | m))
     per_period: DD | None
     rate: float  # for steady motion: the constant rate
+
+    def __init__(self, name: str, start: float, c0_over_kappa: float, terms: tuple[tuple[float, float, float], ...],
+                 per_period: DD | None, rate: float) -> None:
+        self.__dict__.update(name=name, start=start, c0_over_kappa=c0_over_kappa, terms=terms, per_period=per_period,
+                             rate=rate)
 
 
 class _Pass:
@@ -323,8 +328,6 @@ class _Pass:
         sn, cn, dn of r — going through am(r) would amplify its rounding by 1/dn near the turning
         points when m → 1.
         """
-        from ...special.integrals import pi_of_am
-
         one_minus_n = self.sol._mp.get("one_minus_n", {})
         batch = []
         for n in ns:
@@ -343,6 +346,8 @@ class _Pass:
                 if n in batch:
                     self._get(f"pi({n!r})", lambda: value.reshape(shape))
         elif batch:
+            from ...special.integrals import pi_of_am  # (here: the series' motions never load the integrals)
+
             shape = np.shape(self.phase()[1])
             flat = [np.reshape(x, (1, -1)) for x in self.reduced_jacobi()]
             values = np.asarray(pi_of_am(np.array(batch)[:, None], np.reshape(self.phase()[1], (1, -1)),
