@@ -18,17 +18,16 @@ scale is zero (a body at rest) the absolute deviation is reported, and says so.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from .records import Frozen, record
-
 __all__ = ["Drift", "drift"]
 
 
-@record
-class Drift(Frozen):
+@dataclass(frozen=True)
+class Drift:
     """``value`` = max_t |x(t) - reference| / ``scale``; ``relative_to`` names the scale and gives its size.
 
     ``deviation`` is max_t |x(t) - reference| itself and ``start`` the quantity's value at the first sample
@@ -41,10 +40,6 @@ class Drift(Frozen):
     relative_to: str
     deviation: float = float("nan")
     start: float = float("nan")
-
-    def __init__(self, value: float, scale: float, relative_to: str, deviation: float = float("nan"),
-                 start: float = float("nan")) -> None:
-        self.__dict__.update(value=value, scale=scale, relative_to=relative_to, deviation=deviation, start=start)
 
 
 def drift(series: Any, scale: float, relative_to: str, *, reference: Any = None) -> Drift:

@@ -12,17 +12,18 @@ avoid is the rounding of t itself (relative 1.1e-16).
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from ..special._doubledouble import PI_HI, PI_LO, dd_add, two_prod
-from .records import Frozen, record
 
 __all__ = ["DD", "reduce_phase", "reduce_phase_nearest", "mod_two_pi", "EXTENDED", "EPS_EXTENDED", "EXTENDED_TO_DOUBLE",
            "EXTENDED_SAFETY", "EXTENDED_TOLERANCE"]
 
 
-@record
-class DD(Frozen):
+@dataclass(frozen=True)
+class DD:
     """A double-double constant (hi + lo)·2^exp (|lo| ≤ ulp(hi)/2), ~32 significant digits.
 
     ``exp`` is 0 except for rates built by :meth:`scaled`, whose size may lie outside the range
@@ -32,9 +33,6 @@ class DD(Frozen):
     hi: float
     lo: float
     exp: int = 0
-
-    def __init__(self, hi: float, lo: float, exp: int = 0) -> None:
-        self.__dict__.update(hi=hi, lo=lo, exp=exp)
 
     @classmethod
     def of(cls, x) -> "DD":

@@ -50,14 +50,13 @@ import dataclasses
 import math
 import re
 import time
-from dataclasses import field
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 from ..core import cbuild, codecache
 from ..core.model import derivation_log, derivation_seconds
-from ..core.records import Record, record
 from ..errors import InvalidInputError, MechDeriveError
 from ..systems.base import OutOfReach, Quantity, Solved
 from .schema import Scene, waived
@@ -66,8 +65,8 @@ from ..systems.scaling import Scaled, check_samples, in_scene_units, scale_scene
 __all__ = ["RunResult", "run_scene", "summarize"]
 
 
-@record
-class RunResult(Record):
+@dataclass
+class RunResult:
     """The table a scene asked for (``t`` then the quantities, in order) and the run's report."""
 
     scene: Scene
@@ -75,11 +74,6 @@ class RunResult(Record):
     columns: dict[str, np.ndarray]
     report: dict[str, Any] = field(default_factory=dict)
     solution: Any = None  # the solved object (in the solver's units where the report has ``units``)
-
-    def __init__(self, scene: Scene, t: np.ndarray, columns: dict[str, np.ndarray], report: dict[str, Any] | None = None,
-                 solution: Any = None) -> None:
-        self.__dict__.update(scene=scene, t=t, columns=columns, report={} if report is None else report,
-                             solution=solution)
 
     def output_columns(self) -> dict[str, np.ndarray]:
         """The scene's quantities as ``-o`` writes and the summary prints them: each in its ``[output].units``

@@ -98,12 +98,11 @@ import re
 import stat
 import sys
 from collections.abc import Mapping
-from dataclasses import field
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Iterable
 
 import numpy as np
 
-from ..core.records import Frozen, record
 from ..errors import InvalidInputError
 from ..systems import registry
 from ..systems.base import Key, Quantity, System
@@ -295,8 +294,8 @@ def _gigabytes(n: float) -> str:
     return f"{n / 1e9:.3g} GB" if n >= 1e8 else f"{n / 1e6:.3g} MB"
 
 
-@record
-class SizeEstimate(Frozen):
+@dataclass(frozen=True)
+class SizeEstimate:
     """What a scene's run will take, estimated from its system, samples and quantities before solving.
 
     ``columns`` counts ``t`` and the quantities; ``values = samples × columns``.  ``table_bytes``
@@ -311,11 +310,6 @@ class SizeEstimate(Frozen):
     table_bytes: int
     csv_bytes: int
     memory_bytes: int
-
-    def __init__(self, samples: int, columns: int, values: int, table_bytes: int, csv_bytes: int,
-                 memory_bytes: int) -> None:
-        self.__dict__.update(samples=samples, columns=columns, values=values, table_bytes=table_bytes,
-                             csv_bytes=csv_bytes, memory_bytes=memory_bytes)
 
     @classmethod
     def of(cls, system: str, samples: int, quantities: int) -> "SizeEstimate":
@@ -346,8 +340,8 @@ def _check_size(scene: "Scene") -> None:
 
 # ----------------------------------------------------------------------------- the scene
 
-@record
-class Scene(Frozen):
+@dataclass(frozen=True)
+class Scene:
     """One checked scene.  Constructing it validates and normalises every field.
 
     The system (:mod:`mechderive.systems.registry`) checks its own ``parameters`` and ``initial``
@@ -384,21 +378,6 @@ class Scene(Frozen):
     samples_per_period: int | None = None
     #: the concrete system (:class:`~mechderive.systems.base.System`) this scene runs, set on construction
     model: Any = field(default=None, compare=False, repr=False)
-
-    def __init__(self, system: str, method: str, rtol: float, parameters: dict, initial: dict, t_end: float,
-                 samples: int, quantities: tuple, name: str | None = None, strict: bool = DEFAULT_STRICT,
-                 definition: Mapping[str, Any] | None = None, summary: tuple = (),
-                 output_units: Mapping[str, str] | None = None, given_with_units: Mapping[str, str] | None = None,
-                 t_start: float = 0.0, times_given: tuple | None = None, samples_per_period: int | None = None,
-                 model: Any = None) -> None:
-        self.__dict__.update(
-            system=system, method=method, rtol=rtol, parameters=parameters, initial=initial, t_end=t_end,
-            samples=samples, quantities=quantities, name=name, strict=strict,
-            definition={} if definition is None else definition, summary=summary,
-            output_units={} if output_units is None else output_units,
-            given_with_units={} if given_with_units is None else given_with_units, t_start=t_start,
-            times_given=times_given, samples_per_period=samples_per_period, model=model)
-        self.__post_init__()
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__

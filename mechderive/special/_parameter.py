@@ -25,11 +25,11 @@ from __future__ import annotations
 
 import functools
 
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from ..core.records import Frozen, record
 from ..core.validate import as_finite_array
 from ..errors import InvalidInputError
 from ._doubledouble import PI_HI, PI_LO, dd_add, dd_div, dd_mul, dd_sqrt, two_prod, two_sum
@@ -48,8 +48,8 @@ __all__ = [
 CONSISTENCY_TOL = 1e-15
 
 
-@record
-class Parameter(Frozen):
+@dataclass(frozen=True)
+class Parameter:
     """A validated parameter array: m, m1 = 1 - m (m1_hi + m1_lo exactly), K = K_hi + K_lo."""
 
     m: np.ndarray
@@ -57,9 +57,6 @@ class Parameter(Frozen):
     m1_lo: np.ndarray
     K_hi: np.ndarray
     K_lo: np.ndarray
-
-    def __init__(self, m: np.ndarray, m1: np.ndarray, m1_lo: np.ndarray, K_hi: np.ndarray, K_lo: np.ndarray) -> None:
-        self.__dict__.update(m=m, m1=m1, m1_lo=m1_lo, K_hi=K_hi, K_lo=K_lo)
 
     @property
     def kc(self) -> np.ndarray:

@@ -23,9 +23,9 @@ tested to a few ulp of Π over one period.
 
 from __future__ import annotations
 
-import numpy as np
+from dataclasses import dataclass
 
-from ..core.records import Frozen, record
+import numpy as np
 
 __all__ = ["PiSeries", "fit_pi_series", "fit_pi_series_for_motion"]
 
@@ -37,17 +37,14 @@ _SAMPLES = (128, 512)
 _TAIL = 2e-16
 
 
-@record
-class PiSeries(Frozen):
+@dataclass(frozen=True)
+class PiSeries:
     """Π(n_i; am u | m) for characteristics n_i, as ``mean[i]·u + Σ_k sine[i, k-1] sin(kπu/K)``."""
 
     n: np.ndarray        # (k,) the characteristics
     mean: np.ndarray     # (k,) a₀ = Π(n|m)/K
     sine: np.ndarray     # (k, N) the sine coefficients a_k K/(kπ), k = 1..N
     K: float
-
-    def __init__(self, n: np.ndarray, mean: np.ndarray, sine: np.ndarray, K: float) -> None:
-        self.__dict__.update(n=n, mean=mean, sine=sine, K=K)
 
     def __call__(self, u: np.ndarray) -> np.ndarray:
         """Π(n_i; am u | m) at u (any shape): shape (k, *u.shape)."""
@@ -116,8 +113,8 @@ _PANEL_WIDTH = 0.5
 _MAX_PANELS = 4000
 
 
-@record
-class PiPanels(Frozen):
+@dataclass(frozen=True)
+class PiPanels:
     """p(u) = Π(n; am u | m) - (Π(n|m)/K) u, the bounded part of Π, by panels from the quarter periods.
 
     p is odd about 0 and about K and vanishes at every multiple of K, so two functions on
@@ -131,9 +128,6 @@ class PiPanels(Frozen):
 
     width: float
     coef: np.ndarray  # (2, panels, degree + 2): p₀ and p₁ on each panel, in x ∈ [-1, 1]
-
-    def __init__(self, width: float, coef: np.ndarray) -> None:
-        self.__dict__.update(width=width, coef=coef)
 
     def __call__(self, e: np.ndarray, v: np.ndarray) -> np.ndarray:
         y = np.abs(v)

@@ -31,9 +31,9 @@ the registry's built-in table for a system shipped with the package).
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Callable, ClassVar, Mapping, NamedTuple
 
-from ..core.records import Frozen, record
 from ..errors import InvalidInputError
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -46,8 +46,8 @@ if TYPE_CHECKING:  # pragma: no cover
 __all__ = ["BatchSummary", "Key", "Quantity", "Solved", "OutOfReach", "System", "Derivation", "Derivations"]
 
 
-@record
-class Key(Frozen):
+@dataclass(frozen=True)
+class Key:
     """One scene key of ``[parameters]`` or ``[initial]``.
 
     ``size`` is 0 for a number, n for a list of n numbers (``omega = [w1, w2, w3]``); ``default``
@@ -65,23 +65,15 @@ class Key(Frozen):
     default: Any = None
     scales_as: str = ""
 
-    def __init__(self, name: str, unit: str, meaning: str, required: bool = True, size: int = 0,
-                 default: Any = None, scales_as: str = "") -> None:
-        self.__dict__.update(name=name, unit=unit, meaning=meaning, required=required, size=size, default=default,
-                             scales_as=scales_as)
 
-
-@record
-class Quantity(Frozen):
+@dataclass(frozen=True)
+class Quantity:
     """One output column: its name, unit (SI; ``"rad"``, ``"rad/s"``, ``"1"``) and a one-line meaning."""
 
     name: str
     unit: str
     meaning: str
     scales_as: str = ""
-
-    def __init__(self, name: str, unit: str, meaning: str, scales_as: str = "") -> None:
-        self.__dict__.update(name=name, unit=unit, meaning=meaning, scales_as=scales_as)
 
 
 class Solved(NamedTuple):
@@ -117,8 +109,8 @@ class OutOfReach(InvalidInputError):
     """A closed form cannot follow this motion (the message says why); ``method = "auto"`` integrates instead."""
 
 
-@record
-class Derivation(Frozen):
+@dataclass(frozen=True)
+class Derivation:
     """One quantity ``derive`` can print: its name, a one-line meaning, the chapter's equation (or ""),
     and ``build(options)`` returning the SymPy expression, matrix or equation list.
 
@@ -143,12 +135,6 @@ class Derivation(Frozen):
     default: bool = False
     options: frozenset = frozenset()
     substitute: Callable[[Any], Mapping] | None = None
-
-    def __init__(self, name: str, meaning: str, equation: str, build: Callable[[Any], Any], lhs: Any = None,
-                 default: bool = False, options: frozenset = frozenset(),
-                 substitute: Callable[[Any], Mapping] | None = None) -> None:
-        self.__dict__.update(name=name, meaning=meaning, equation=equation, build=build, lhs=lhs, default=default,
-                             options=options, substitute=substitute)
 
 
 class Derivations(tuple):

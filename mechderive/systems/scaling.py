@@ -34,12 +34,11 @@ from __future__ import annotations
 import contextlib
 import contextvars
 import math
-from dataclasses import field
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Iterator
 
 import numpy as np
 
-from ..core.records import Frozen, record
 from ..errors import InvalidInputError
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -63,8 +62,8 @@ _COMFORTABLE = 64
 MAX_INTEGRATED_RADIANS = 2.0**18
 MAX_INTEGRATED_RADIANS_SCIPY = 2.0**14
 
-@record
-class Scaled(Frozen):
+@dataclass(frozen=True)
+class Scaled:
     """A scene in its solver's units: ``scene`` (the original when ``identity``), times t' = t·2^``time``,
     and per output column the exponent e with value = value'·2^e (0 for absent names)."""
 
@@ -81,13 +80,6 @@ class Scaled(Frozen):
     scales: dict[str, str] = field(default_factory=dict)
     fastest: float = 0.0
     note: str = ""
-
-    def __init__(self, original: Scene, scene: Scene, time: int = 0, columns: dict[str, int] | None = None,
-                 rate: int = 0, offsets: dict[str, float] | None = None, keys: str = "",
-                 scales: dict[str, str] | None = None, fastest: float = 0.0, note: str = "") -> None:
-        self.__dict__.update(original=original, scene=scene, time=time, columns={} if columns is None else columns,
-                             rate=rate, offsets={} if offsets is None else offsets, keys=keys,
-                             scales={} if scales is None else scales, fastest=fastest, note=note)
 
     @property
     def identity(self) -> bool:

@@ -52,13 +52,12 @@ The error of a run is measured by :meth:`FreeTopSolution.error_estimate`.
 from __future__ import annotations
 
 import functools
-from dataclasses import field
+from dataclasses import dataclass, field
 from typing import Any, Sequence
 
 import numpy as np
 
 from ...core.phase import DD, mod_two_pi, reduce_phase_nearest
-from ...core.records import Frozen, record
 from ...core.validate import as_finite_array, check_rotation_matrix
 from ...errors import InvalidInputError, UnphysicalInertiaError
 from ...inertia.validate import check_principal_moments
@@ -77,8 +76,8 @@ _TRACKING_CHUNK = 1 << 16
 _MAX_COUNT = 2.0**50
 
 
-@record
-class _Orientation(Frozen):
+@dataclass(frozen=True)
+class _Orientation:
     """Constants of the orientation (φ', the L frame), computed on the first request for R(t).
 
     φ'(t) = φ'0 + ν t + (c2/λ) [p(u) - p(u0)], where Π(n; am u | m) = (Π(n|m)/K) u + p(u) splits
@@ -96,11 +95,6 @@ class _Orientation(Frozen):
     pi_c_over_K: float  # Π(n|m)/K (the Carlson fallback subtracts it)
     p0: float  # p(u0) as evaluated in double (so φ'(0) = φ'0 exactly)
     dphi: DD | None  # precession per polhode period
-
-    def __init__(self, S: np.ndarray, phi0: float, nu: DD, c2_over_lam: float, n: float, slope: float,
-                 pi_c_over_K: float, p0: float, dphi: DD | None) -> None:
-        self.__dict__.update(S=S, phi0=phi0, nu=nu, c2_over_lam=c2_over_lam, n=n, slope=slope, pi_c_over_K=pi_c_over_K,
-                             p0=p0, dphi=dphi)
 
 
 def _nearest_arguments(q: np.ndarray, near: tuple[float, float]) -> tuple[float, float]:
@@ -144,8 +138,8 @@ def _ldexp(x: np.ndarray, scaled: tuple[float, int]) -> np.ndarray:
     return np.ldexp(scaled[0] * x, scaled[1])
 
 
-@record
-class _Jacobi(Frozen):
+@dataclass(frozen=True)
+class _Jacobi:
     """sn, cn, dn at u = q·K + v (q an integer-valued float), and the values s, c, d at v."""
 
     q: np.ndarray
@@ -157,19 +151,12 @@ class _Jacobi(Frozen):
     c: np.ndarray
     d: np.ndarray
 
-    def __init__(self, q: np.ndarray, v: np.ndarray, sn: np.ndarray, cn: np.ndarray, dn: np.ndarray, s: np.ndarray,
-                 c: np.ndarray, d: np.ndarray) -> None:
-        self.__dict__.update(q=q, v=v, sn=sn, cn=cn, dn=dn, s=s, c=c, d=d)
-
     def __getitem__(self, index) -> "_Jacobi":
         return _Jacobi(*(getattr(self, f)[index] for f in ("q", "v", "sn", "cn", "dn", "s", "c", "d")))
 
 
-_DD0 = DD(0.0, 0.0)
-
-
-@record
-class FreeTopSolution(Frozen):
+@dataclass(frozen=True)
+class FreeTopSolution:
     """The exact motion of one free rigid body; call its methods with arrays of times (s).
 
     Build it with :func:`exact_free_top`.  Attributes describe the motion:
@@ -197,7 +184,7 @@ class FreeTopSolution(Frozen):
     _I_rel: tuple[float, float, float]
     _quarter: DD | None = None  # K
     _q0: int = 0
-    _v0: DD = _DD0
+    _v0: DD = DD(0.0, 0.0)
     _kc: tuple[float, int] = (1.0, 0)  # k' = √(1 - m) as mantissa·2^exp
     _tiny: bool = False  # 1 - m < 1e-34: v-values are tanh, sech, sech
     _L_unit: tuple[float, float, float] = (0.0, 0.0, 1.0)  # (I_x P, I_y Q, I_z S)/|L|
@@ -206,20 +193,6 @@ class FreeTopSolution(Frozen):
     _t_max: float = float("inf")
     _spin: tuple = (None, None)  # steady: (|ω| as DD, unit ω)
     _mp: dict = field(default_factory=dict, repr=False)  # 40-digit setup values, caches
-
-    def __init__(self, moments: tuple[float, float, float], omega0: tuple[float, float, float], R0: np.ndarray,
-                 kind: str, m: float, m1: float, energy: float, L_norm: float, polhode_period: float,
-                 _perm: np.ndarray, _amp: tuple[float, float, float], _lam: DD, _u0: DD, _period: DD | None,
-                 _I_rel: tuple[float, float, float], _quarter: DD | None = None, _q0: int = 0, _v0: DD = _DD0,
-                 _kc: tuple[float, int] = (1.0, 0), _tiny: bool = False,
-                 _L_unit: tuple[float, float, float] = (0.0, 0.0, 1.0), _ab_unit: tuple[float, float] = (1.0, 1.0),
-                 _amp_scaled: tuple = ((0.0, 0.0, 0.0), 0), _t_max: float = float("inf"), _spin: tuple = (None, None),
-                 _mp: dict | None = None) -> None:
-        self.__dict__.update(
-            moments=moments, omega0=omega0, R0=R0, kind=kind, m=m, m1=m1, energy=energy, L_norm=L_norm,
-            polhode_period=polhode_period, _perm=_perm, _amp=_amp, _lam=_lam, _u0=_u0, _period=_period,
-            _I_rel=_I_rel, _quarter=_quarter, _q0=_q0, _v0=_v0, _kc=_kc, _tiny=_tiny, _L_unit=_L_unit,
-            _ab_unit=_ab_unit, _amp_scaled=_amp_scaled, _t_max=_t_max, _spin=_spin, _mp={} if _mp is None else _mp)
 
     # --- construction helpers --------------------------------------------------------------
 

@@ -53,6 +53,7 @@ from __future__ import annotations
 
 import functools
 import math
+from dataclasses import dataclass
 from typing import Any, Mapping
 
 import numpy as np
@@ -62,7 +63,6 @@ from ...errors import DerivationError, InvalidInputError
 from ...core.codecache import cached_lambdify
 from ...kinematics.rotations import angular_velocity_body, rotation_matrix
 from ...core.phase import DD, mod_two_pi
-from ...core.records import Frozen, record
 from ...special._doubledouble import dd_add, two_prod
 from .parameters import check_initial, check_params
 
@@ -201,8 +201,8 @@ def _rates_build():
     return [hm.I1, hm.I3, dm, dp, x, y], [phi_dot, psi_dot, *half]
 
 
-@record
-class _Angle(Frozen):
+@dataclass(frozen=True)
+class _Angle:
     """The closed form of one precession-type angle: start, linear part, Π terms, advance per period."""
 
     name: str
@@ -211,11 +211,6 @@ class _Angle(Frozen):
     terms: tuple[tuple[float, float, float], ...]  # (c_i/κ, n_i, Π(n_i; am v0 | m))
     per_period: DD | None
     rate: float  # for steady motion: the constant rate
-
-    def __init__(self, name: str, start: float, c0_over_kappa: float, terms: tuple[tuple[float, float, float], ...],
-                 per_period: DD | None, rate: float) -> None:
-        self.__dict__.update(name=name, start=start, c0_over_kappa=c0_over_kappa, terms=terms, per_period=per_period,
-                             rate=rate)
 
 
 class _Pass:
