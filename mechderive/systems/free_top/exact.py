@@ -59,7 +59,7 @@ import numpy as np
 
 from ...core.phase import DD, mod_two_pi, reduce_phase_nearest
 from ...core.validate import as_finite_array, check_rotation_matrix
-from ...errors import InvalidInputError, UnphysicalInertiaError
+from ...errors import InvalidInputError
 from ...inertia.validate import check_principal_moments
 from ...kinematics.rotations import euler_angles_from_matrix, rotation_matrix
 from ...kinematics.so3 import expm_so3
