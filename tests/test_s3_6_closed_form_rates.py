@@ -91,6 +91,13 @@ def _elements(initial):
     return ell, E, e, mp.atan2(rd * ell / e, (ell**2 / r - 1) / e)
 
 
+def _mean_anomaly(f, e):
+    """M = E − e sin E at the true anomaly f (mpmath), tan(E/2) = √((1 − e)/(1 + e)) tan(f/2), E unwrapped by f's turns."""
+    turns = mpmath.nint(f / (2 * mpmath.pi))
+    ecc = 2 * mpmath.atan(mpmath.sqrt((1 - e) / (1 + e)) * mpmath.tan(f / 2)) + 2 * mpmath.pi * turns
+    return ecc - e * mpmath.sin(ecc)
+
+
 def test_kepler_ellipse_time_along_phi_is_keplers_equation_over_a_hundred_orbits():
     """t(φ) of the ellipse along φ against M = E − e sin E, n t = M(f) − M(f0), tan(E/2) = √((1 − e)/(1 + e)) tan(f/2)
     (E unwrapped by whole turns of f), at 30 digits; the period against 2π a^{3/2}; dt/dφ's quadrature over one orbit."""
@@ -103,12 +110,8 @@ def test_kepler_ellipse_time_along_phi_is_keplers_equation_over_a_hundred_orbits
         ell, E, e, f0 = _elements(initial)
         a = -1 / (2 * E)
 
-        def mean_anomaly(f):
-            turns = mpmath.nint(f / (2 * mpmath.pi))
-            ecc = 2 * mpmath.atan(mpmath.sqrt((1 - e) / (1 + e)) * mpmath.tan(f / 2)) + 2 * mpmath.pi * turns
-            return ecc - e * mpmath.sin(ecc)
 
-        want = [float((mean_anomaly(f0 + mpmath.mpf(p)) - mean_anomaly(f0)) * a**1.5) for p in phi]
+        want = [float((_mean_anomaly(f0 + mpmath.mpf(p), e) - _mean_anomaly(f0, e)) * a**1.5) for p in phi]
         period = 2 * mpmath.pi * a**1.5
         one_orbit = mpmath.quad(lambda p: (1 + e * mpmath.cos(f0 + p)) ** -2 * ell**3, [0, mpmath.pi, 2 * mpmath.pi])
         assert abs(one_orbit - period) <= mpmath.mpf(10) ** -25 * period  # the two references agree
@@ -135,12 +138,8 @@ def test_kepler_time_minus_a_target_keeps_its_digits_after_a_thousand_orbits():
         ell, E, e, f0 = _elements(initial)
         a = -1 / (2 * E)
 
-        def mean_anomaly(f):
-            turns = mpmath.nint(f / (2 * mpmath.pi))
-            ecc = 2 * mpmath.atan(mpmath.sqrt((1 - e) / (1 + e)) * mpmath.tan(f / 2)) + 2 * mpmath.pi * turns
-            return ecc - e * mpmath.sin(ecc)
 
-        exact = [(mean_anomaly(f0 + mpmath.mpf(float(p))) - mean_anomaly(f0)) * a**1.5 for p in phi]
+        exact = [(_mean_anomaly(f0 + mpmath.mpf(float(p)), e) - _mean_anomaly(f0, e)) * a**1.5 for p in phi]
         target = np.array([float(x) for x in exact])
         got = integral.minus(phi, target)
         error = np.array([float(abs(mpmath.mpf(float(g)) - (x - mpmath.mpf(float(y))))) for g, x, y in
