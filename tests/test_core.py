@@ -71,6 +71,24 @@ def test_compile_cache_never_compiles_twice():
     assert after["misses"] - before["misses"] <= 1 and after["hits"] - before["hits"] >= 1
 
 
+def test_compile_cache_keeps_apart_what_compiles_differently():
+    """The in-process key is structural (no srepr): equal requests share a function, look-alikes do not."""
+    x, xr = sp.Symbol("x"), sp.Symbol("x", positive=True)
+    d1, d2 = sp.Dummy("x"), sp.Dummy("x")
+    f = cc.compile_expressions([x / 3, 1], [x])
+    assert cc.compile_expressions([x / 3, 1], [x]) is f  # rebuilt, structurally equal: a hit
+    assert cc.compile_expressions([x / 3, 1.0], [x]) is not f  # 1 and 1.0
+    assert cc.compile_expressions([x / 3, sp.Float(1.0)], [x]) is not f
+    assert cc.compile_expressions([x / sp.Float(3.0), 1], [x]) is not f
+    assert cc.compile_expressions([xr / 3, 1], [xr]) is not f  # same name, other assumptions
+    assert cc.compile_expressions(sp.Matrix([x / 3, 1]), [x]) is not f  # container kind
+    assert cc.compile_expressions(sp.Matrix([[x / 3, 1]]), [x]) is not cc.compile_expressions(sp.Matrix([x / 3, 1]), [x])
+    assert cc.compile_expressions(d1 + 1, [d1]) is not cc.compile_expressions(d2 + 1, [d2])
+    assert cc.compile_expressions(sp.Float("0.1", 15) * x, [x]) is not cc.compile_expressions(sp.Float("0.1", 30) * x, [x])
+    assert cc.compile_scalar([x, 1], [x]) is not cc.compile_scalar([x, 1.0], [x])
+    assert cc.compile_expressions([x / 3, 1.0], [x])(3.0).tolist() == [1.0, 1.0]
+
+
 def test_compiled_matrix_broadcasts_and_matches_sympy(rng):
     x, y = sp.symbols("x y")
     expr = sp.Matrix([[sp.sin(x) * y, x], [sp.exp(y), 1]])

@@ -5,8 +5,10 @@ takes an expression, or a (nested) list / Matrix of them, and an ordered sequenc
 of argument symbols, and returns a function ``f(*args)`` that broadcasts over
 NumPy arrays.  It uses :func:`sympy.lambdify` with common-subexpression
 elimination (``cse=True``), and keeps every result in a process-wide cache keyed
-by the expressions' ``srepr`` and the argument list, so identical requests never
-compile twice.  The generated function's docstring lists the argument order.
+by the expressions themselves (SymPy's structural hash and equality) and the argument
+list, so identical requests never compile twice.  The generated function's docstring
+lists the argument order.  (The disk cache of :mod:`.codecache` is keyed differently: by
+name and a fingerprint of the package.)
 """
 
 from __future__ import annotations
@@ -20,18 +22,44 @@ from ..errors import ArgumentError
 
 __all__ = ["compile_expressions", "compile_cached", "compile_scalar", "compile_cache_info", "clear_compile_cache"]
 
-_CACHE: dict[str, Callable[..., Any]] = {}
+_CACHE: dict[Any, Callable[..., Any]] = {}
 _LOCK = _thread.allocate_lock()  # threading.Lock(), without importing threading on every run
 _STATS = {"hits": 0, "misses": 0}
+_EXACT_EQUALITY: list[bool] = []  # _structural_equality_is_exact(), once per process
 
 
-def _key(exprs: Any, args: Sequence[Any]) -> str:
+def _structural_equality_is_exact() -> bool:
+    """Whether SymPy's ``==`` tells a Float from an equal Rational (SymPy >= 1.13: 1 != 1.0, x + 1 != x + 1.0)."""
+    if _EXACT_EQUALITY:
+        return _EXACT_EQUALITY[0]
     import sympy as sp
 
-    text = sp.srepr(exprs) + "|" + sp.srepr(tuple(args))
-    import hashlib
+    x = sp.Symbol("x")
+    _EXACT_EQUALITY.append(bool(sp.Float(1.0) != sp.Integer(1) and x + 1 != x + sp.Float(1.0)))
+    return _EXACT_EQUALITY[0]
 
-    return hashlib.sha256(text.encode()).hexdigest()
+
+def _key(kind: str, shape: tuple[int, ...], flat: Sequence[Any], args: Sequence[Any]) -> Any:
+    """The in-process cache key of a request: its container kind, shape, entries and argument symbols.
+
+    Built from the SymPy objects themselves — a tuple hashed by SymPy's structural hash (computed
+    once per expression and kept by SymPy) and compared by structural equality — instead of their
+    ``srepr`` text, which for the long expressions of section 3.7 took longer than compiling them
+    (~0.3 s per request).  Structural equality keeps apart what compiles differently: symbols of the
+    same name with different assumptions, distinct Dummies, Floats of different precision, and (SymPy
+    >= 1.13) 1 and 1.0; ``flat`` has been through :func:`_checked`, so Python numbers are SymPy ones
+    (1 → Integer, 1.0 → Float).  With an older SymPy, where 1 == 1.0, the key is the ``srepr`` text.
+    """
+    import sympy as sp
+
+    if not _structural_equality_is_exact():  # pragma: no cover - SymPy < 1.13
+        import hashlib
+
+        text = sp.srepr(tuple(flat)) + "|" + sp.srepr(tuple(args))
+        return kind, shape, hashlib.sha256(text.encode()).hexdigest()
+    # a mutable Matrix among the entries (compile_scalar given nested lists) is unhashable: key its immutable twin
+    entries = tuple(sp.ImmutableMatrix(e) if isinstance(e, sp.MatrixBase) else e for e in flat)
+    return kind, shape, entries, tuple(args)
 
 
 def _checked(flat: list[Any], args: Sequence[Any]) -> tuple[list[Any], list[Any]]:
@@ -72,24 +100,24 @@ def compile_expressions(exprs: Any, args: Sequence[Any], *, name: str = "f") -> 
     """
     import sympy as sp
 
-    key = _key(exprs, args)
+    shape: tuple[int, ...]
+    if isinstance(exprs, sp.MatrixBase):
+        kind, shape = "matrix", exprs.shape
+        flat = list(exprs)
+    elif isinstance(exprs, (list, tuple)):
+        arr = np.array(exprs, dtype=object)
+        kind, shape = "sequence", arr.shape
+        flat = list(arr.ravel())
+    else:
+        kind, shape = "scalar", ()
+        flat = [exprs]
+    flat, args = _checked(flat, args)
+    key = _key(kind, shape, flat, args)
     with _LOCK:
         hit = _CACHE.get(key)
         if hit is not None:
             _STATS["hits"] += 1
             return hit
-    shape: tuple[int, ...]
-    if isinstance(exprs, sp.MatrixBase):
-        shape = exprs.shape
-        flat = list(exprs)
-    elif isinstance(exprs, (list, tuple)):
-        arr = np.array(exprs, dtype=object)
-        shape = arr.shape
-        flat = list(arr.ravel())
-    else:
-        shape = ()
-        flat = [exprs]
-    flat, args = _checked(flat, args)
     raw = sp.lambdify(list(args), flat, modules="numpy", cse=True)
     compiled = wrap_vectorised(raw, [str(a) for a in args], shape, name)
     with _LOCK:
@@ -149,14 +177,14 @@ def compile_scalar(exprs: Any, args: Sequence[Any], *, name: str = "f") -> Calla
     """
     import sympy as sp
 
-    key = "scalar:" + _key(exprs, args)
+    flat = list(exprs) if isinstance(exprs, (sp.MatrixBase, list, tuple)) else [exprs]
+    flat, args = _checked(flat, args)
+    key = _key("scalar-function", (len(flat),), flat, args)
     with _LOCK:
         hit = _CACHE.get(key)
         if hit is not None:
             _STATS["hits"] += 1
             return hit
-    flat = list(exprs) if isinstance(exprs, (sp.MatrixBase, list, tuple)) else [exprs]
-    flat, args = _checked(flat, args)
     raw = sp.lambdify(list(args), flat, modules="math", cse=True)
     raw.__doc__ = f"{name}({', '.join(map(str, args))}) -> list of {len(flat)} floats"
     with _LOCK:
