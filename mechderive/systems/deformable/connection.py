@@ -167,11 +167,15 @@ class ShapeConnection:
                                     f"got det Ĩ = {float(np.min(det)):.3g}")
 
     def connection(self, x: Any) -> np.ndarray:
-        """The vectors of Ω_A(x) (3.87), shape (..., n, 3): Ω_A = hat(row A)."""
+        """The vectors of Ω_A(x) (3.87), shape (..., n, 3): Ω_A = hat(row A).
+
+        Ω_A = Ĩ⁻¹L̃_A needs an invertible Ĩ: a shape with det Ĩ ≤ 0 is refused.  (Checked on Ĩ itself: the
+        derived Ω_A has the factors common to its numerator and det Ĩ cancelled, so it can stay finite
+        where Ĩ is singular — e.g. 0 for a component that vanishes identically.)
+        """
         with np.errstate(divide="ignore", invalid="ignore"):  # a singular Ĩ is reported below
             out = self._call("connection", lambda body: body.connection_vectors, *self._shape(x))
-        if not np.all(np.isfinite(out)):
-            self._check_invertible(x)
+        self._check_invertible(x)
         return out
 
     def angular_velocity(self, x: Any, xdot: Any) -> np.ndarray:

@@ -34,12 +34,14 @@ Matrix([
 
 from __future__ import annotations
 
+import math
 import numbers
 import random
 from typing import Any, Iterable, Mapping, Sequence
 
 import mpmath
 import sympy as sp
+from sympy.polys.rings import PolyRing
 
 from ...core.model import SymbolicModel, derived
 from ...core.symbols import state_symbol
@@ -48,6 +50,9 @@ from . import derivation
 from .derivation import apparent_momentum_symbols, evaluate_noncommutative, hat, vee
 
 __all__ = ["DeformableBody", "centred_positions"]
+
+_SINGULAR = ("expected an inertia tensor Ĩ(x) invertible for generic shapes (masses not all on one line through "
+             "the centre of mass), got det Ĩ ≡ 0")
 
 
 def _as_expr(value: Any, what: str) -> sp.Expr:
@@ -96,29 +101,193 @@ def centred_positions(masses: Sequence[Any], positions: Sequence[Any]) -> list[s
     return [r - centre for r in rs]
 
 
+class _TrigPolynomials:
+    """Polynomials in cos a_k, sin a_k (generators c_k, s_k) modulo c_k² + s_k² − 1, as SymPy sparse polynomials.
+
+    The normal form keeps every c_k to at most the first power (c_k² → 1 − s_k²).  The c_k² + s_k² − 1 share
+    no variables, so they are a Gröbner basis for any order with c_k > s_k and this normal form is the
+    remainder ``sympy.reduced`` computes (lex order), without its general division algorithm.  Products
+    are taken between polynomials, not by expanding products of long SymPy sums — the cost of (3.92)
+    for a body whose Ĩ and L̃ are long trigonometric polynomials.
+
+    Two representations.  Where every expression is a polynomial with rational coefficients in the
+    c_k, s_k, its other symbols and their reciprocals (the 1/m of centred positions), elements of the
+    ring ℚ[c, s, symbols, reciprocals] (``sympy.polys.rings``, built from the expression tree without
+    ``expand``; a symbol times its reciprocal is cancelled by :meth:`normal`).  Otherwise ``Poly`` in the
+    c_k, s_k over the domain SymPy chooses (Floats, roots, sums in denominators …), or ``PolynomialError``.
+
+    The arguments a_k are identified after expansion (cos(y(x + ½)) and cos(xy + y/2) are one generator);
+    no relation between different arguments (x and 2x) is used.
+    """
+
+    def __init__(self, args: Iterable[sp.Expr], symbols: Sequence[sp.Symbol] | None = None) -> None:
+        spelled: dict[sp.Expr, list[sp.Expr]] = {}
+        for a in args:
+            spelled.setdefault(sp.expand(a), []).append(a)
+        self.args = sorted(spelled, key=sp.default_sort_key)
+        self.fwd: dict[sp.Expr, sp.Symbol] = {}
+        self.back: dict[sp.Symbol, sp.Expr] = {}
+        gens: list[sp.Symbol] = []
+        for k, a in enumerate(self.args):
+            c, s = sp.Dummy(f"c{k}"), sp.Dummy(f"s{k}")
+            for b in spelled[a]:
+                self.fwd[sp.cos(b)], self.fwd[sp.sin(b)] = c, s
+            self.back[c], self.back[s] = sp.cos(a), sp.sin(a)
+            gens += [c, s]
+        self._pairs: list[tuple[int, int]] = []  # (index of a symbol x, index of 1/x) among the generators
+        if symbols is None:
+            self.ring: PolyRing | None = None
+            self.gens: tuple[sp.Symbol, ...] = tuple(gens) or (sp.Dummy("unused"),)
+            return
+        symbols = list(symbols)
+        inverses = [sp.Dummy(f"inv_{x.name}") for x in symbols]
+        for i, (x, inv) in enumerate(zip(symbols, inverses)):
+            self.back[inv] = 1 / x
+            self._pairs.append((len(gens) + i, len(gens) + len(symbols) + i))
+        self.ring = PolyRing([*gens, *symbols, *inverses] or [sp.Dummy("unused")], sp.QQ)
+        self.gens = tuple(self.ring.symbols)
+        elements = dict(zip(self.gens, self.ring.gens))
+        self._element_of = {f: elements[g] for f, g in self.fwd.items()}
+        self._element_of.update((x, elements[x]) for x in symbols)
+        self._reciprocal_of = {x: elements[inv] for x, inv in zip(symbols, inverses)}
+
+    @classmethod
+    def convert(cls, exprs: Sequence[sp.Expr]) -> tuple["_TrigPolynomials", list[Any]]:
+        """The ring of every sine and cosine in ``exprs``, and ``exprs`` in it (``PolynomialError`` if impossible)."""
+        args = {f.args[0] for e in exprs for f in e.atoms(sp.sin, sp.cos)}
+        exact = cls(args, sorted(set().union(*(e.free_symbols for e in exprs)), key=sp.default_sort_key))
+        try:
+            cache: dict[sp.Expr, Any] = {}
+            return exact, [exact.normal(exact._element(e, cache)) for e in exprs]
+        except ValueError:  # not a polynomial over ℚ in these symbols (a Float, a root, π, a sum in a denominator …)
+            pass
+        general = cls(args)
+        return general, [sp.Poly(e.xreplace(general.fwd), *general.gens) for e in exprs]
+
+    def _element(self, e: sp.Expr, cache: dict) -> Any:
+        """``e`` in ℚ[c, s, symbols, reciprocals], built from its tree (``ValueError`` where it is not in it)."""
+        hit = cache.get(e)
+        if hit is not None:
+            return hit
+        ring = self.ring
+        if e in self._element_of:
+            out = self._element_of[e]
+        elif e.is_Add:
+            out = ring.zero
+            for a in e.args:
+                out = out + self._element(a, cache)
+        elif e.is_Mul:
+            out = ring.one
+            for a in e.args:
+                out = out * self._element(a, cache)
+        elif e.is_Pow and e.exp.is_Integer:
+            if e.exp >= 0:
+                out = self._element(e.base, cache) ** int(e.exp)
+            elif e.base in self._reciprocal_of:
+                out = self._reciprocal_of[e.base] ** int(-e.exp)
+            else:
+                raise ValueError(f"a denominator {e.base} that is not a symbol")
+        elif e.is_Rational:  # not a Float: ℚ would silently make it rational
+            out = ring.ground_new(sp.QQ(int(e.p), int(e.q)))
+        else:
+            raise ValueError(f"not a polynomial over the rationals: {e}")
+        cache[e] = out
+        return out
+
+    def _terms(self, p: Any) -> dict:
+        return dict(p.items()) if self.ring is not None else dict(p.terms())
+
+    def normal(self, p: Any) -> Any:
+        """``p`` with each x^a inv_x^b written as x^(a−b) or inv_x^(b−a) (like terms then combine)."""
+        if not self._pairs:
+            return p
+        out: dict[tuple[int, ...], Any] = {}
+        for monom, coeff in self._terms(p).items():
+            m = list(monom)
+            for i, j in self._pairs:
+                common = min(m[i], m[j])
+                m[i] -= common
+                m[j] -= common
+            key = tuple(m)
+            out[key] = out[key] + coeff if key in out else coeff
+        return self.ring.from_dict({m: c for m, c in out.items() if c})
+
+    def has_trig(self, p: Any) -> bool:
+        """Whether ``p`` has a term with a c_k or s_k."""
+        n = 2 * len(self.args)
+        return any(any(m[:n]) for m in self._terms(p))
+
+    def reduce(self, p: Any) -> Any:
+        """The normal form of ``p``: each c_k^(2q+r) replaced by c_k^r (1 − s_k²)^q, expanded binomially."""
+        p = self.normal(p)
+        pairs = len(self.args)
+        terms = self._terms(p)
+        if not any(m[2 * k] > 1 for m in terms for k in range(pairs)):
+            return p
+        out: dict[tuple[int, ...], Any] = {}
+        for monom, coeff in terms.items():
+            expansion = [((), 1)]
+            for k in range(pairs):
+                q, r = divmod(monom[2 * k], 2)
+                ks = monom[2 * k + 1]
+                factors = [((r, ks + 2 * j), (-1) ** j * math.comb(q, j)) for j in range(q + 1)]
+                expansion = [(m + m2, f * f2) for m, f in expansion for m2, f2 in factors]
+            rest = monom[2 * pairs:]
+            for m, f in expansion:
+                m = m + rest
+                out[m] = out[m] + coeff * f if m in out else coeff * f
+        out = {m: c for m, c in out.items() if c}
+        if self.ring is not None:
+            return self.ring.from_dict(out)
+        return sp.Poly.from_dict(out or {(0,) * len(self.gens): 0}, *self.gens, domain=p.domain)
+
+    def expanded(self, p: Any) -> sp.Expr:
+        """``p`` as an expanded SymPy expression in sines and cosines."""
+        e = p.as_expr() if self.ring is not None else sp.expand(p.as_expr())
+        return e.xreplace(self.back)
+
+    def expr(self, p: Any) -> sp.Expr:
+        """``p`` back in sines and cosines, expanded, with common factors pulled out (``factor_terms``)."""
+        return sp.factor_terms(self.expanded(p))
+
+    def substitute(self, expr: sp.Expr, values: Mapping[sp.Symbol, Any]) -> Any:
+        """The polynomial ``expr`` in the symbols of ``values`` evaluated at those ring elements."""
+        cache: dict[sp.Expr, Any] = dict(values)
+        return self.normal(self._element(expr, cache))
+
+    def degree_in(self, p: Any, gens: Sequence[Any]) -> tuple[int, int]:
+        """(lowest, highest) total degree of the terms of ``p`` in the generators ``gens`` (elements)."""
+        where = [self.ring.gens.index(g) for g in gens]
+        degrees = [sum(m[i] for i in where) for m in p.keys()] or [0]
+        return min(degrees), max(degrees)
+
+    def coefficient(self, p: Any, gen: Any) -> Any:
+        """The coefficient of the generator ``gen`` (an element) in ``p``, linear in it."""
+        i = self.ring.gens.index(gen)
+        out = {m[:i] + (0,) + m[i + 1:]: c for m, c in p.items() if m[i] == 1}
+        return self.ring.from_dict(out)
+
+    def cancel(self, p: Any, q: Any) -> tuple[Any, Any]:
+        """p/q with the common polynomial factors of p and q divided out (a unit normalises q)."""
+        return p.cancel(q) if self.ring is not None else p.cancel(q, include=True)
+
+
 def _tidy(expr: sp.Expr) -> sp.Expr:
     """A shorter, equal form of a polynomial in sines and cosines: reduced modulo cos² + sin² = 1.
 
     The exact normal form of :mod:`mechderive.core.simplify` (cos x, sin x → c, s; reduce by
     c² + s² − 1), without its rational-function steps, which are slow on the long sums of
-    (3.93)–(3.94).  Anything else (denominators, other functions) is only expanded.
+    (3.93)–(3.94).  Anything else (denominators, other functions) is only expanded.  The same
+    expression as expanding, reducing with ``sympy.reduced`` (basis c² + s² − 1, lex order) and
+    ``factor_terms``, computed with :class:`_TrigPolynomials`.
     """
-    e = sp.expand(expr)
-    args = sorted({f.args[0] for f in e.atoms(sp.sin, sp.cos)}, key=sp.default_sort_key)
-    fwd, back, gens, basis = {}, {}, [], []
-    for i, a in enumerate(args):
-        c, s = sp.Dummy(f"c{i}"), sp.Dummy(f"s{i}")
-        fwd[sp.cos(a)], fwd[sp.sin(a)] = c, s
-        back[c], back[s] = sp.cos(a), sp.sin(a)
-        gens += [c, s]
-        basis.append(c**2 + s**2 - 1)
-    if not gens:
-        return e
     try:
-        _, rem = sp.reduced(sp.expand(e.xreplace(fwd)), basis, *gens, order="lex")
-    except sp.PolificationFailed:
-        return e
-    return sp.factor_terms(sp.expand(rem).xreplace(back))
+        ring, (p,) = _TrigPolynomials.convert([expr])
+    except sp.PolynomialError:
+        return sp.expand(expr)
+    if not ring.has_trig(p):
+        return ring.expanded(p)  # sp.expand(expr)
+    return ring.expr(ring.reduce(p))
 
 
 class DeformableBody(SymbolicModel):
@@ -262,17 +431,45 @@ class DeformableBody(SymbolicModel):
     # ------------------------------------------------------------------ gauge potential
     @derived
     def angular_velocity_vector(self) -> sp.Matrix:
-        """v(x, ẋ) with Ω = hat(v): the general solution of L = 0 of :mod:`.derivation` at this Ĩ, L̃."""
+        """v(x, ẋ) with Ω = hat(v): the general solution of L = 0 of :mod:`.derivation` at this Ĩ, L̃ (3.92).
+
+        The general solution is v_a = N_a(Ĩ, L̃)/D_a(Ĩ), N_a and D_a polynomials (D_a = det Ĩ).  They are
+        evaluated at this body's Ĩ(x) and L̃(x, ẋ) as polynomials in the sines and cosines of the shape
+        (:class:`_TrigPolynomials`: products taken exactly and reduced modulo cos² + sin² = 1, not
+        substituted into the written-out general inverse), and the factors common to N_a and D_a are
+        divided out — e.g. for the cat, whose Ĩ is block-diagonal, v_1 = L̃_1/Ĩ_11.  The same function of
+        x and ẋ as substituting into the general solution, shorter.  (Bodies that are not polynomials in
+        sines and cosines are substituted into the general solution as it stands.)
+        """
         from ...inertia.tensor import general_inertia_symbols
 
         general = vee(derivation.model().angular_velocity_solution)
-        if _tidy(self.inertia_tensor.det()) == 0:
-            raise InvalidInputError("expected an inertia tensor Ĩ(x) invertible for generic shapes (masses not all "
-                                    "on one line through the centre of mass), got det Ĩ ≡ 0")
         I, Lt = general_inertia_symbols(), apparent_momentum_symbols()
-        subs = {I[a, b]: self.inertia_tensor[a, b] for a in range(3) for b in range(a, 3)}
-        subs.update(zip(Lt, self.apparent_angular_momentum))
-        return general.subs(subs, simultaneous=True)
+        Itilde, Ltilde = self.inertia_tensor, self.apparent_angular_momentum
+        values = {I[a, b]: Itilde[a, b] for a in range(3) for b in range(a, 3)}
+        values.update(zip(Lt, Ltilde))
+        fractions = [sp.fraction(sp.together(e)) for e in general]
+        if any(den.free_symbols & set(Lt) for _, den in fractions):
+            raise DerivationError("expected the denominators of the solution Ω of L = 0 to be free of L̃")
+        try:
+            ring, known = _TrigPolynomials.convert([*values.values(), *self.velocities])
+        except sp.PolynomialError:
+            ring = None
+        if ring is None or ring.ring is None:  # not polynomial over ℚ in sines, cosines and symbols
+            if _tidy(Itilde.det()) == 0:
+                raise InvalidInputError(_SINGULAR)
+            return general.subs(values, simultaneous=True)
+        at = dict(zip(values, known))
+        parts = []
+        for num, den in fractions:
+            q = ring.reduce(ring.substitute(den, at))
+            if not q:
+                raise InvalidInputError(_SINGULAR)
+            p = ring.reduce(ring.substitute(num, at))
+            parts.append(ring.cancel(p, q))
+        # kept for connection_vectors, which reads ∂v/∂ẋ^A off these polynomials exactly
+        self.__dict__["_angular_velocity_polynomials"] = (ring, parts, known[len(values):])
+        return sp.Matrix([ring.expr(p) / ring.expr(q) for p, q in parts])
 
     @derived
     def angular_velocity(self) -> sp.Matrix:
@@ -283,14 +480,31 @@ class DeformableBody(SymbolicModel):
     def connection_vectors(self) -> sp.Matrix:
         """Row A: the vector of Ω_A(x) = ∂Ω/∂ẋ^A (3.87); checked that Ω = Ω_A ẋ^A exactly.
 
-        Ω is linear in ẋ because ∂Ω/∂ẋ^A contains no ẋ and Ω vanishes at ẋ = 0.
+        Ω is linear in ẋ because ∂Ω/∂ẋ^A contains no ẋ and Ω vanishes at ẋ = 0.  For a body whose v is
+        kept as polynomials p_a/q_a (:attr:`angular_velocity_vector`), q_a is free of ẋ and ∂v_a/∂ẋ^A is
+        the coefficient of ẋ^A in p_a: read off exactly, after checking that every term of p_a has
+        exactly one factor ẋ^A (the same two conditions).
         """
         v = self.angular_velocity_vector
-        rows = v.jacobian(sp.Matrix(self.velocities)).T
-        if rows.free_symbols & set(self.velocities):
-            raise DerivationError("expected ∂Ω/∂ẋ^A to be independent of ẋ (Ω linear in ẋ, (3.87))")
-        if any(e != 0 for e in v.subs({s: 0 for s in self.velocities})):
-            raise DerivationError("expected Ω = 0 at ẋ = 0 (no shape change, no rotation)")
+        kept = self.__dict__.get("_angular_velocity_polynomials")
+        if kept is None:
+            rows = v.jacobian(sp.Matrix(self.velocities)).T
+            if rows.free_symbols & set(self.velocities):
+                raise DerivationError("expected ∂Ω/∂ẋ^A to be independent of ẋ (Ω linear in ẋ, (3.87))")
+            if any(e != 0 for e in v.subs({s: 0 for s in self.velocities})):
+                raise DerivationError("expected Ω = 0 at ẋ = 0 (no shape change, no rotation)")
+            return rows
+        ring, parts, rates = kept
+        rows = sp.zeros(self.dimension, 3)
+        for a, (p, q) in enumerate(parts):
+            if ring.degree_in(q, rates) != (0, 0):
+                raise DerivationError("expected the denominator of Ω to be independent of ẋ")
+            if p and ring.degree_in(p, rates) != (1, 1):
+                raise DerivationError("expected Ω linear in ẋ and Ω = 0 at ẋ = 0 (no shape change, no rotation)"
+                                      " (3.87)")
+            den = ring.expr(q)
+            for A, rate in enumerate(rates):
+                rows[A, a] = ring.expr(ring.coefficient(p, rate)) / den
         return rows
 
     @derived
