@@ -210,8 +210,15 @@ def axis_rotation(axis: int, angle: Any) -> sp.Matrix:
     if axis == 3:
         return m.R3.subs(m.angle, angle)
     if axis == 2:
-        return _simplify_matrix(_exp(m.angle * generator(2))).subs(m.angle, angle)
+        return _axis2_rotation().subs(m.angle, angle)
     return generator(axis)  # raises the error for a bad axis
+
+
+@functools.cache
+def _axis2_rotation() -> sp.Matrix:
+    """R2(α) = exp(α J2) in the symbol ``alpha``, by the general matrix exponential: derived once per process
+    (~0.3 s; the falling cat asks for it twice), each call substituting its angle into a copy."""
+    return _simplify_matrix(_exp(model().angle * generator(2)))
 
 
 def euler_rotation(phi: Any, theta: Any, psi: Any) -> sp.Matrix:

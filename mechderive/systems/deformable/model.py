@@ -152,17 +152,21 @@ class _TrigPolynomials:
         self._reciprocal_of = {x: elements[inv] for x, inv in zip(symbols, inverses)}
 
     @classmethod
-    def convert(cls, exprs: Sequence[sp.Expr]) -> tuple["_TrigPolynomials", list[Any]]:
-        """The ring of every sine and cosine in ``exprs``, and ``exprs`` in it (``PolynomialError`` if impossible)."""
+    def convert(cls, exprs: Sequence[sp.Expr], *, general: bool = True) -> tuple["_TrigPolynomials", list[Any]]:
+        """The ring of every sine and cosine in ``exprs``, and ``exprs`` in it (``PolynomialError`` if impossible).
+
+        ``general=False``: only the exact ring ℚ[c, s, symbols, reciprocals] (``PolynomialError`` otherwise).
+        """
         args = {f.args[0] for e in exprs for f in e.atoms(sp.sin, sp.cos)}
         exact = cls(args, sorted(set().union(*(e.free_symbols for e in exprs)), key=sp.default_sort_key))
         try:
             cache: dict[sp.Expr, Any] = {}
             return exact, [exact.normal(exact._element(e, cache)) for e in exprs]
-        except ValueError:  # not a polynomial over ℚ in these symbols (a Float, a root, π, a sum in a denominator …)
-            pass
-        general = cls(args)
-        return general, [sp.Poly(e.xreplace(general.fwd), *general.gens) for e in exprs]
+        except ValueError as e:  # not a polynomial over ℚ in these symbols (a Float, a root, π, a sum in a denominator …)
+            if not general:
+                raise sp.PolynomialError(str(e)) from None
+        ring = cls(args)
+        return ring, [sp.Poly(e.xreplace(ring.fwd), *ring.gens) for e in exprs]
 
     def _element(self, e: sp.Expr, cache: dict) -> Any:
         """``e`` in ℚ[c, s, symbols, reciprocals], built from its tree (``ValueError`` where it is not in it)."""
@@ -250,6 +254,29 @@ class _TrigPolynomials:
         """``p`` back in sines and cosines, expanded, with common factors pulled out (``factor_terms``)."""
         return sp.factor_terms(self.expanded(p))
 
+    def tidy(self, p: Any) -> tuple[Any, sp.Expr]:
+        """(the polynomial, the expression) of :func:`_tidy`: reduced and ``factor_terms``-ed if it has a sine or
+        cosine, else only expanded."""
+        p = self.normal(p)
+        if not self.has_trig(p):
+            return p, self.expanded(p)
+        p = self.reduce(p)
+        return p, self.expr(p)
+
+    def diff(self, p: Any, x: sp.Symbol) -> Any:
+        """∂p/∂x in the exact ring: through x, its reciprocal (∂(1/x)/∂x = −1/x²) and every c_k, s_k
+        (∂c_k/∂x = −s_k ∂a_k/∂x, ∂s_k/∂x = c_k ∂a_k/∂x); ``ValueError`` if some ∂a_k/∂x is not in the ring."""
+        ring = self.ring
+        x_gen, inv = self._element_of[x], self._reciprocal_of[x]
+        out = p.diff(x_gen) - inv**2 * p.diff(inv)
+        gens = ring.gens
+        for k, a in enumerate(self.args):
+            da = sp.diff(a, x)
+            if da != 0:
+                c, s = gens[2 * k], gens[2 * k + 1]
+                out += self._element(da, {}) * (c * p.diff(s) - s * p.diff(c))
+        return self.normal(out)
+
     def substitute(self, expr: sp.Expr, values: Mapping[sp.Symbol, Any]) -> Any:
         """The polynomial ``expr`` in the symbols of ``values`` evaluated at those ring elements."""
         cache: dict[sp.Expr, Any] = dict(values)
@@ -285,9 +312,7 @@ def _tidy(expr: sp.Expr) -> sp.Expr:
         ring, (p,) = _TrigPolynomials.convert([expr])
     except sp.PolynomialError:
         return sp.expand(expr)
-    if not ring.has_trig(p):
-        return ring.expanded(p)  # sp.expand(expr)
-    return ring.expr(ring.reduce(p))
+    return ring.tidy(p)[1]
 
 
 class DeformableBody(SymbolicModel):
@@ -335,7 +360,30 @@ class DeformableBody(SymbolicModel):
                 f"expected masses and positions in the shape coordinates {[str(s) for s in self.coordinates]} "
                 f"and parameters {[str(s) for s in self.parameters]}, got undeclared symbols {sorted(map(str, used - allowed))}")
         self.velocities = tuple(state_symbol(f"{x.name}_dot") for x in self.coordinates)
+        self._twin_polynomials()
         self._check_centre_of_mass()
+
+    def _twin_polynomials(self) -> None:
+        """The masses and positions (and the shape velocities) as elements of one exact ring, if they are in it.
+
+        Where every mass and position is a polynomial over ℚ in sines, cosines, the symbols and their
+        reciprocals, the derived quantities are computed on these *twins* — sparse polynomials, multiplied
+        and reduced exactly (:class:`_TrigPolynomials`) — and written as expressions once, the same
+        expressions as expanding and :func:`_tidy`-ing SymPy sums (5–10× slower).  ``self._twin`` maps a
+        quantity's name to its twin; ``self._ring`` is None (and the expressions are used) otherwise.
+        """
+        self._ring: _TrigPolynomials | None = None
+        self._twin: dict[str, Any] = {}
+        n = len(self.masses)
+        try:
+            ring, polys = _TrigPolynomials.convert(
+                [*self.masses, *(c for r in self.positions for c in r), *self.velocities], general=False)
+        except sp.PolynomialError:
+            return
+        self._ring = ring
+        self._twin["masses"] = polys[:n]
+        self._twin["positions"] = [polys[n + 3 * i: n + 3 * i + 3] for i in range(n)]
+        self._twin["velocities"] = polys[4 * n:]
 
     @staticmethod
     def _symbols(values: Any, what: str, *, allow_empty: bool) -> tuple[sp.Symbol, ...]:
@@ -355,7 +403,12 @@ class DeformableBody(SymbolicModel):
         return {s: mpmath.mpf(rng.uniform(0.3, 1.3)) for s in (*self.coordinates, *self.parameters)}
 
     def _check_centre_of_mass(self) -> None:
-        # Each mass and position evaluated once at three random points, to 30 digits and summed there:
+        if self._ring is not None:  # exactly: Σ m_i r̃_i reduces to the zero polynomial
+            ring, ms, rs = self._ring, self._twin["masses"], self._twin["positions"]
+            if not any(ring.reduce(sum((m * r[a] for m, r in zip(ms, rs)), ring.ring.zero)) for a in range(3)):
+                return
+        # Otherwise (and to report a non-zero sum, or one zero only by identities between different angles):
+        # each mass and position evaluated once at three random points, to 30 digits and summed there:
         # 10× faster than lambdifying the long sums to mpmath (the cat's 12 masses).
         rng = random.Random(37)
         for _ in range(3):
@@ -380,13 +433,28 @@ class DeformableBody(SymbolicModel):
     @derived
     def reduced_positions(self) -> tuple[sp.Matrix, ...]:
         """The r̃_i with entries expanded and reduced modulo cos² + sin² = 1 (equal, shorter)."""
-        return tuple(r.applyfunc(_tidy) for r in self.positions)
+        if self._ring is None:
+            return tuple(r.applyfunc(_tidy) for r in self.positions)
+        tidied = [[self._ring.tidy(c) for c in r] for r in self._twin["positions"]]
+        self._twin["reduced_positions"] = [[p for p, _ in r] for r in tidied]
+        return tuple(sp.Matrix([e for _, e in r]) for r in tidied)
 
     @derived
     def position_jacobians(self) -> tuple[sp.Matrix, ...]:
         """∂r̃_i/∂x^A, one 3×n matrix per mass."""
+        reduced = self.reduced_positions
+        if self._ring is not None:
+            try:
+                ring = self._ring
+                tidied = [[[ring.tidy(ring.diff(c, x)) for x in self.coordinates] for c in r]
+                          for r in self._twin["reduced_positions"]]
+            except ValueError:  # an angle whose derivative is not a polynomial (cos √x): differentiate expressions
+                pass
+            else:
+                self._twin["position_jacobians"] = [[[p for p, _ in row] for row in J] for J in tidied]
+                return tuple(sp.Matrix([[e for _, e in row] for row in J]) for J in tidied)
         xs = sp.Matrix(self.coordinates)
-        return tuple(r.jacobian(xs).applyfunc(_tidy) for r in self.reduced_positions)
+        return tuple(r.jacobian(xs).applyfunc(_tidy) for r in reduced)
 
     @derived
     def shape_velocities(self) -> tuple[sp.Matrix, ...]:
@@ -406,10 +474,31 @@ class DeformableBody(SymbolicModel):
             total += expr.xreplace(subs)
         return total
 
+    def _per_mass_twin(self, expr: sp.Matrix, rates: Sequence[Sequence[Any]] | None = None) -> list[tuple[Any, sp.Expr]]:
+        """:meth:`_per_mass` on the twins, each entry tidied: [(polynomial, expression)] in row-major order."""
+        d = derivation.model()
+        names = [state_symbol(f"rtilde{a}") for a in (1, 2, 3)]
+        dots = [state_symbol(f"rtilde{a}_dot") for a in (1, 2, 3)]
+        ring = self._ring
+        totals = [ring.ring.zero] * len(expr)
+        for i, (m, r) in enumerate(zip(self._twin["masses"], self._twin["reduced_positions"])):
+            values = {d.mass: m, **dict(zip(names, r))}
+            if rates is not None:
+                values.update(zip(dots, rates[i]))
+            for k, e in enumerate(expr):
+                totals[k] += ring.substitute(e, values)
+        return [ring.tidy(p) for p in totals]
+
     @derived
     def inertia_tensor(self) -> sp.Matrix:
         """Ĩ_ab(x) (3.93): Σ_i of the per-mass inertia −∂(R⁻¹L)/∂v of :mod:`.derivation`."""
-        return self._per_mass(derivation.model().inertia_per_mass).applyfunc(_tidy)
+        per_mass = derivation.model().inertia_per_mass
+        if self._ring is None:
+            return self._per_mass(per_mass).applyfunc(_tidy)
+        _ = self.reduced_positions  # derived (and logged) with the twins used here
+        tidied = self._per_mass_twin(per_mass)
+        self._twin["inertia_tensor"] = [p for p, _ in tidied]
+        return sp.Matrix(3, 3, [e for _, e in tidied])
 
     @derived
     def apparent_angular_momentum(self) -> sp.Matrix:
@@ -423,9 +512,21 @@ class DeformableBody(SymbolicModel):
         if per_mass.jacobian(dots).free_symbols & set(dots) or any(e != 0 for e in per_mass.subs({d: 0 for d in dots})):
             raise DerivationError("expected the apparent angular momentum to be linear in the shape velocities")
         total = sp.zeros(3, 1)
-        for A, xdot in enumerate(self.velocities):
-            coeff = self._per_mass(per_mass, [J.col(A) for J in self.position_jacobians]).applyfunc(_tidy)
-            total += coeff * xdot
+        jacobians = self.position_jacobians
+        twins = self._twin.get("position_jacobians")
+        if twins is None:
+            for A, xdot in enumerate(self.velocities):
+                coeff = self._per_mass(per_mass, [J.col(A) for J in jacobians]).applyfunc(_tidy)
+                total += coeff * xdot
+            return total
+        twin, coefficients = [self._ring.ring.zero] * 3, []
+        for A, (xdot, rate) in enumerate(zip(self.velocities, self._twin["velocities"])):
+            tidied = self._per_mass_twin(per_mass, [[row[A] for row in J] for J in twins])
+            total += sp.Matrix([e for _, e in tidied]) * xdot
+            twin = [t + p * rate for t, (p, _) in zip(twin, tidied)]
+            coefficients.append([e for _, e in tidied])
+        self._twin["apparent_angular_momentum"] = twin
+        self._twin["apparent_momentum_coefficients"] = coefficients  # L̃_A, expressions (connection_vectors)
         return total
 
     # ------------------------------------------------------------------ gauge potential
@@ -433,13 +534,18 @@ class DeformableBody(SymbolicModel):
     def angular_velocity_vector(self) -> sp.Matrix:
         """v(x, ẋ) with Ω = hat(v): the general solution of L = 0 of :mod:`.derivation` at this Ĩ, L̃ (3.92).
 
-        The general solution is v_a = N_a(Ĩ, L̃)/D_a(Ĩ), N_a and D_a polynomials (D_a = det Ĩ).  They are
-        evaluated at this body's Ĩ(x) and L̃(x, ẋ) as polynomials in the sines and cosines of the shape
-        (:class:`_TrigPolynomials`: products taken exactly and reduced modulo cos² + sin² = 1, not
-        substituted into the written-out general inverse), and the factors common to N_a and D_a are
-        divided out — e.g. for the cat, whose Ĩ is block-diagonal, v_1 = L̃_1/Ĩ_11.  The same function of
-        x and ẋ as substituting into the general solution, shorter.  (Bodies that are not polynomials in
-        sines and cosines are substituted into the general solution as it stands.)
+        The general solution is v_a = N_a(Ĩ, L̃)/D_a(Ĩ), N_a and D_a polynomials (D_a = det Ĩ).  For a body
+        whose Ĩ and L̃ have polynomial twins (:meth:`_twin_polynomials`) each component is written in the
+        shorter of two equal forms:
+
+        * *expanded*: N_a and D_a evaluated on the twins — products taken exactly and reduced modulo
+          cos² + sin² = 1 — with their common factors cancelled (e.g. for the cat, whose Ĩ is
+          block-diagonal, v_1 = L̃_1/Ĩ_11; for a body turned by S(x), whose products collapse);
+        * *factored*: N_a(Ĩ, L̃)/D_a(Ĩ) with the entries of Ĩ and L̃ put in as they are, when expanding
+          would multiply out long sums (several independent angles) into more terms than that.
+
+        Otherwise the entries are substituted into the general solution as it stands.  Either way the
+        same function of x and ẋ as substituting into the general solution.
         """
         from ...inertia.tensor import general_inertia_symbols
 
@@ -447,29 +553,35 @@ class DeformableBody(SymbolicModel):
         I, Lt = general_inertia_symbols(), apparent_momentum_symbols()
         Itilde, Ltilde = self.inertia_tensor, self.apparent_angular_momentum
         values = {I[a, b]: Itilde[a, b] for a in range(3) for b in range(a, 3)}
-        values.update(zip(Lt, Ltilde))
-        fractions = [sp.fraction(sp.together(e)) for e in general]
-        if any(den.free_symbols & set(Lt) for _, den in fractions):
-            raise DerivationError("expected the denominators of the solution Ω of L = 0 to be free of L̃")
-        try:
-            ring, known = _TrigPolynomials.convert([*values.values(), *self.velocities])
-        except sp.PolynomialError:
-            ring = None
-        if ring is None or ring.ring is None:  # not polynomial over ℚ in sines, cosines and symbols
+        if "apparent_angular_momentum" not in self._twin:  # not polynomials: substitute into the solution
             if _tidy(Itilde.det()) == 0:
                 raise InvalidInputError(_SINGULAR)
+            values.update(zip(Lt, Ltilde))
             return general.subs(values, simultaneous=True)
-        at = dict(zip(values, known))
-        parts = []
-        for num, den in fractions:
+        ring = self._ring
+        at = {I[a, b]: self._twin["inertia_tensor"][3 * a + b] for a in range(3) for b in range(a, 3)}
+        at.update(zip(Lt, self._twin["apparent_angular_momentum"]))
+
+        def terms(e: sp.Expr) -> int:  # the number of terms e has when written with the twins' entries
+            return sum(sum(k * len(at[x]) for x, k in zip(at, m)) or 1 for m in sp.Poly(e, *at).monoms())
+
+        parts, out = [], []
+        for e in general:
+            num, den = sp.fraction(sp.together(e))
+            if den.free_symbols & set(Lt) or any(sum(m) != 1 for m in sp.Poly(num, *Lt).monoms()):
+                raise DerivationError("expected the solution Ω of L = 0 linear in L̃, with a denominator free of L̃")
             q = ring.reduce(ring.substitute(den, at))
             if not q:
                 raise InvalidInputError(_SINGULAR)
-            p = ring.reduce(ring.substitute(num, at))
-            parts.append(ring.cancel(p, q))
-        # kept for connection_vectors, which reads ∂v/∂ẋ^A off these polynomials exactly
-        self.__dict__["_angular_velocity_polynomials"] = (ring, parts, known[len(values):])
-        return sp.Matrix([ring.expr(p) / ring.expr(q) for p, q in parts])
+            p, q = ring.cancel(ring.reduce(ring.substitute(num, at)), q)
+            if len(p) + len(q) <= terms(num) + terms(den):
+                parts.append(("expanded", p, q))
+                out.append(ring.expr(p) / ring.expr(q))
+            else:
+                parts.append(("factored", num, den))
+                out.append(num.xreplace(dict(zip(Lt, Ltilde))).xreplace(values) / den.xreplace(values))
+        self._twin["angular_velocity_vector"] = parts  # what connection_vectors reads ∂v/∂ẋ^A from
+        return sp.Matrix(out)
 
     @derived
     def angular_velocity(self) -> sp.Matrix:
@@ -480,23 +592,33 @@ class DeformableBody(SymbolicModel):
     def connection_vectors(self) -> sp.Matrix:
         """Row A: the vector of Ω_A(x) = ∂Ω/∂ẋ^A (3.87); checked that Ω = Ω_A ẋ^A exactly.
 
-        Ω is linear in ẋ because ∂Ω/∂ẋ^A contains no ẋ and Ω vanishes at ẋ = 0.  For a body whose v is
-        kept as polynomials p_a/q_a (:attr:`angular_velocity_vector`), q_a is free of ẋ and ∂v_a/∂ẋ^A is
-        the coefficient of ẋ^A in p_a: read off exactly, after checking that every term of p_a has
-        exactly one factor ẋ^A (the same two conditions).
+        Ω is linear in ẋ because ∂Ω/∂ẋ^A contains no ẋ and Ω vanishes at ẋ = 0.  For the components of v
+        kept in the forms of :attr:`angular_velocity_vector`, ∂v_a/∂ẋ^A is read off exactly: *expanded*,
+        v_a = p_a/q_a with q_a free of ẋ and every term of p_a of degree one in ẋ (checked, the same two
+        conditions), the coefficient of ẋ^A in p_a over q_a; *factored*, v_a = N_a(Ĩ, L̃)/D_a(Ĩ) with N_a
+        linear in L̃ (checked there) and L̃ = L̃_A ẋ^A, N_a(Ĩ, L̃_A)/D_a(Ĩ).
         """
         v = self.angular_velocity_vector
-        kept = self.__dict__.get("_angular_velocity_polynomials")
-        if kept is None:
+        parts = self._twin.get("angular_velocity_vector")
+        if parts is None:
             rows = v.jacobian(sp.Matrix(self.velocities)).T
             if rows.free_symbols & set(self.velocities):
                 raise DerivationError("expected ∂Ω/∂ẋ^A to be independent of ẋ (Ω linear in ẋ, (3.87))")
             if any(e != 0 for e in v.subs({s: 0 for s in self.velocities})):
                 raise DerivationError("expected Ω = 0 at ẋ = 0 (no shape change, no rotation)")
             return rows
-        ring, parts, rates = kept
+        from ...inertia.tensor import general_inertia_symbols
+
+        I, Lt = general_inertia_symbols(), apparent_momentum_symbols()
+        values = {I[a, b]: self.inertia_tensor[a, b] for a in range(3) for b in range(a, 3)}
+        coefficients = self._twin["apparent_momentum_coefficients"]
+        ring, rates = self._ring, self._twin["velocities"]
         rows = sp.zeros(self.dimension, 3)
-        for a, (p, q) in enumerate(parts):
+        for a, (form, p, q) in enumerate(parts):
+            if form == "factored":
+                for A, coefficient in enumerate(coefficients):
+                    rows[A, a] = p.xreplace(dict(zip(Lt, coefficient))).xreplace(values) / q.xreplace(values)
+                continue
             if ring.degree_in(q, rates) != (0, 0):
                 raise DerivationError("expected the denominator of Ω to be independent of ẋ")
             if p and ring.degree_in(p, rates) != (1, 1):
