@@ -15,6 +15,10 @@ def test_structured_angular_velocity_equals_the_simplified_rdot_rt_3_5_3_6():
     alpha = sp.Symbol("alpha", real=True)
     for axis in (1, 2, 3):
         assert sp.simplify(_exp(alpha * generator(axis)) - _exp_generator(alpha, generator(axis))) == sp.zeros(3)
+    from mechderive.kinematics.euler_symbolic import axis_rotation
+
+    beta = sp.Symbol("beta") / 2  # axis 2 (kept per process, in a symbol of its own) at another angle
+    assert axis_rotation(2, beta) == _simplify_matrix(_exp(beta * generator(2)))
     m = model()
     R = m.rotation
     slow = _simplify_matrix(R.diff(t) * R.T)
