@@ -129,6 +129,23 @@ def _require_zero(m: Any, what: str, *, rational: bool = False) -> None:
             raise DerivationError(f"expected {what} to vanish identically, got {e}")
 
 
+def _state_form(m: sp.Matrix) -> sp.Matrix:
+    """:func:`~mechderive.core.symbols.to_state_symbols` of ``m`` whose functions of t are q(t) and q'(t) only.
+
+    Then the substitution q'(t) → q_dot, q(t) → q is one ``xreplace`` (whole subtrees matched, so q(t)
+    inside q'(t) is never replaced first) — ~5× faster than ``subs``; anything else goes to
+    ``to_state_symbols``.
+    """
+    undefined = sp.core.function.AppliedUndef
+    derivatives, functions = m.atoms(sp.Derivative), m.atoms(undefined)
+    if not all(isinstance(d.expr, undefined) and d.variables == (t,) and d.expr.args == (t,) for d in derivatives) \
+            or not all(f.args == (t,) for f in functions):
+        return to_state_symbols(m)
+    subs = {d: state_symbol(d.expr.func.__name__ + "_dot") for d in derivatives}
+    subs.update((f, state_symbol(f.func.__name__)) for f in functions)
+    return m.xreplace(subs)
+
+
 def evaluate_noncommutative(expr: sp.Expr, values: Mapping[sp.Symbol, sp.Matrix]) -> sp.Matrix:
     """Evaluate a polynomial in non-commuting symbols by substituting matrices (products kept in order).
 
@@ -176,8 +193,8 @@ class ConnectionDerivation(SymbolicModel):
         """
         r = self.matrix * self.shape
         # r and ṙ put in state symbols before the cross product: the same result (a substitution commutes
-        # with products), with fewer terms for subs to walk
-        return (self.mass * to_state_symbols(r).cross(to_state_symbols(r.diff(t)))).applyfunc(sp.expand)
+        # with products), with fewer terms to walk
+        return (self.mass * _state_form(r).cross(_state_form(r.diff(t)))).applyfunc(sp.expand)
 
     @derived
     def epsilon_contracted_momentum(self) -> list[list[sp.Expr]]:
