@@ -115,6 +115,152 @@ def test_3_87_connection_contracts_to_omega(conn, rng):
     np.testing.assert_allclose(conn.angular_velocity(x, xd), by_parts, rtol=1e-12, atol=1e-13)
 
 
+# ============================================================================ the polynomial twins and the forms of Ω
+
+
+def _tidy_reference(expr):
+    """The former ``_tidy``, kept as the reference: expand, sin/cos → c/s, ``sympy.reduced`` by c² + s² − 1 (lex),
+    back, ``factor_terms``."""
+    e = sp.expand(expr)
+    args = sorted({f.args[0] for f in e.atoms(sp.sin, sp.cos)}, key=sp.default_sort_key)
+    fwd, back, gens, basis = {}, {}, [], []
+    for i, a in enumerate(args):
+        c, s = sp.Dummy(f"c{i}"), sp.Dummy(f"s{i}")
+        fwd[sp.cos(a)], fwd[sp.sin(a)] = c, s
+        back[c], back[s] = sp.cos(a), sp.sin(a)
+        gens += [c, s]
+        basis.append(c**2 + s**2 - 1)
+    if not gens:
+        return e
+    _, rem = sp.reduced(sp.expand(e.xreplace(fwd)), basis, *gens, order="lex")
+    return sp.factor_terms(sp.expand(rem).xreplace(back))
+
+
+def _several_angles_body():
+    """Three angles x, 2x, x + y, which the twins treat as independent: Ω is kept factored there."""
+    return DeformableBody([1, 1, 1], centred_positions([1, 1, 1], [(sp.cos(2 * x_), sp.sin(x_), 0),
+                                                                  (0, sp.cos(x_)**3, y_), (x_ * y_, 0, sp.sin(x_ + y_))]),
+                          [x_, y_])
+
+
+def test_tidy_is_the_normal_form_sympy_reduced_computes():
+    from mechderive.systems.deformable.model import _tidy
+
+    m, a = sp.symbols("m a", positive=True)
+    cat = cat_module.cat_body()
+    exprs = [c for r in cat.positions for c in r]  # long centred sums with 1/half_mass
+    exprs += [c for r in three_mass_body().regauged(gauge_rotation()).positions for c in r]
+    exprs += [sp.sin(x_)**4 + sp.cos(x_)**4 * y_ / m, sp.cos(2 * x_)**3 * sp.sin(x_) - 1 / m**2 * sp.cos(x_)**3,
+              (sp.cos(x_) + sp.sin(y_))**5 * a - sp.Rational(1, 3), x_**2 * (1 + y_) / 7, sp.Integer(0),
+              sp.cos(y_ * (x_ + sp.Rational(1, 2))) ** 2 + sp.sin(x_ * y_ + y_ / 2) ** 2,  # one angle, two spellings
+              sp.cos(x_)**2 + sp.sin(x_)**2 - 1 + x_ * sp.sin(y_) - sp.sin(y_) * x_,
+              sp.Float(0.5) * sp.cos(x_)**3, sp.sqrt(2) * sp.cos(x_)**2, sp.cos(x_)**2 / (1 + m)]
+    for e in exprs:
+        assert _tidy(e) == _tidy_reference(e), e
+
+
+@pytest.mark.parametrize("make", [cat_module.cat_body, _several_angles_body], ids=["cat", "several angles"])
+def test_twins_give_the_expressions_of_the_expression_route(make):
+    """Reduced positions, Jacobians, Ĩ (3.93) and L̃ (3.94) computed on the polynomial twins are the very
+    expressions the route on SymPy expressions gives (the former one, with the reference _tidy)."""
+    body = make()
+    assert body._ring is not None and body._ring.ring is not None
+    reduced = tuple(r.applyfunc(_tidy_reference) for r in body.positions)
+    assert body.reduced_positions == reduced
+    xs = sp.Matrix(body.coordinates)
+    jacobians = tuple(r.jacobian(xs).applyfunc(_tidy_reference) for r in reduced)
+    assert body.position_jacobians == jacobians
+    d = derivation.model()
+    assert body.inertia_tensor == body._per_mass(d.inertia_per_mass).applyfunc(_tidy_reference)
+    total = sp.zeros(3, 1)
+    for A, xdot in enumerate(body.velocities):
+        total += body._per_mass(d.apparent_angular_momentum, [J.col(A) for J in jacobians]).applyfunc(_tidy_reference) * xdot
+    assert body.apparent_angular_momentum == total
+
+
+def _numeric_connection(body, functions, point):
+    """Ω_A at ``point`` by solving Ĩ v = L̃_A at 30 digits: Ĩ = Σ m (|r̃|² 1 − r̃ r̃ᵀ), L̃_A = Σ m r̃ × ∂_A r̃, from the
+    positions as given (``functions``: the masses and positions lambdified), not from the body's derived Ĩ, L̃.
+
+    ∂_A r̃ by the central difference (r̃(x + h e_A) − r̃(x − h e_A))/2h at 60 digits, h = 1e-25: truncation
+    h²|r̃‴|/6 ~ 1e-50, rounding 1e-60/h = 1e-35, far below the 1e-24 tested."""
+    syms = [*body.coordinates, *body.parameters]
+    mass_function, pos = functions
+    with mpmath.workdps(60):
+        masses = mass_function(*[point[s] for s in syms])
+        x0 = [point[s] for s in body.coordinates]
+
+        def positions(xs):
+            return [mpmath.matrix(r) for r in pos(*xs, *[point[p] for p in body.parameters])]
+
+        r0 = positions(x0)
+        inertia = mpmath.zeros(3, 3)
+        for m, r in zip(masses, r0):
+            inertia += m * ((r.T * r)[0] * mpmath.eye(3) - r * r.T)
+        h = mpmath.mpf("1e-25")
+        rows = []
+        for A in range(body.dimension):
+            plus = positions([x + (h if B == A else 0) for B, x in enumerate(x0)])
+            minus = positions([x - (h if B == A else 0) for B, x in enumerate(x0)])
+            L = mpmath.matrix(3, 1)
+            for m, r, rp, rm in zip(masses, r0, plus, minus):
+                rd = (rp - rm) / (2 * h)
+                L += m * mpmath.matrix([r[1] * rd[2] - r[2] * rd[1], r[2] * rd[0] - r[0] * rd[2],
+                                        r[0] * rd[1] - r[1] * rd[0]])
+            rows.append(mpmath.lu_solve(inertia, L))
+    return rows
+
+
+def _at(expr, point):
+    """``expr`` at ``point`` (rationals), evaluated with 45-digit Floats."""
+    return mpmath.mpf(sp.Float(sp.re(expr.xreplace({s: sp.Float(v, 45) for s, v in point.items()}).evalf(45)), 45)._mpf_)
+
+
+@pytest.mark.parametrize("make, form", [
+    (three_mass_body, "expanded"), (lambda: three_mass_body().regauged(gauge_rotation()), "expanded"),
+    (cat_module.cat_body, "expanded"), (_several_angles_body, "factored")],
+    ids=["three masses", "regauged", "cat", "several angles"])
+def test_connection_equals_a_30_digit_solve_of_L_equal_0(make, form):
+    """Ω_A (3.87) and Ω (3.92) of the derivation (Ĩ⁻¹ L̃ on the twins, common factors cancelled or kept factored)
+    against solving Ĩ v = L̃_A numerically at 30 digits, at 20 random rational shapes, velocities and parameters."""
+    import random
+
+    body = make()
+    rows, v = body.connection_vectors, body.angular_velocity_vector
+    assert form in {f for f, *_ in body._twin["angular_velocity_vector"]}  # the route taken (both are tested)
+    rnd = random.Random(92)
+    worst = mpmath.mpf(0)
+    syms = [*body.coordinates, *body.parameters]
+    functions = (sp.lambdify(syms, list(body.masses), "mpmath"),
+                 sp.lambdify(syms, [list(r) for r in body.positions], "mpmath"))
+    with mpmath.workdps(30):
+        for _ in range(20):
+            point = {s: sp.Rational(rnd.randint(-90, 90), 97) for s in (*body.coordinates, *body.velocities)}
+            point.update({p: sp.Rational(rnd.randint(30, 130), 100) for p in body.parameters})
+            mp_point = {s: mpmath.mpf(q.p) / q.q for s, q in point.items()}
+            want = _numeric_connection(body, functions, mp_point)
+            total = [sum(want[A][a] * mp_point[xd] for A, xd in enumerate(body.velocities)) for a in range(3)]
+            for A in range(body.dimension):
+                for a in range(3):
+                    worst = max(worst, abs(_at(rows[A, a], point) - want[A][a]) / (1 + abs(want[A][a])))
+            for a in range(3):
+                worst = max(worst, abs(_at(v[a], point) - total[a]) / (1 + abs(total[a])))
+    assert worst < 1e-24, worst
+
+
+def test_cat_connection_is_ltilde_over_itilde_11():
+    """The cat's Ĩ is block-diagonal and its L̃ along e1: the cancelled Ω_swivel is L̃_1,swivel / Ĩ_11, Ω_bend = 0."""
+    from mechderive.systems.deformable.model import _tidy
+
+    body = cat_module.cat_body()
+    rows = body.connection_vectors
+    bend_dot, swivel_dot = body.velocities
+    assert list(rows.row(0)) == [0, 0, 0] and list(rows.row(1))[1:] == [0, 0]
+    expected = body.apparent_angular_momentum[0].coeff(swivel_dot) / body.inertia_tensor[0, 0]
+    assert _tidy(sp.fraction(sp.together(rows[1, 0] - expected))[0]) == 0
+    assert sp.count_ops(rows[1, 0]) < 40
+
+
 # ============================================================================ (3.98) speed independence, arrays
 
 
