@@ -101,6 +101,11 @@ def centred_positions(masses: Sequence[Any], positions: Sequence[Any]) -> list[s
     return [r - centre for r in rs]
 
 
+class _NotInRing(DerivationError):
+    """An expression outside the exact ring of :class:`_TrigPolynomials` (internal: caught where raised, and the
+    expressions are then used as they are)."""
+
+
 class _TrigPolynomials:
     """Polynomials in cos a_k, sin a_k (generators c_k, s_k) modulo c_k² + s_k² − 1, as SymPy sparse polynomials.
 
@@ -162,14 +167,14 @@ class _TrigPolynomials:
         try:
             cache: dict[sp.Expr, Any] = {}
             return exact, [exact.normal(exact._element(e, cache)) for e in exprs]
-        except ValueError as e:  # not a polynomial over ℚ in these symbols (a Float, a root, π, a sum in a denominator …)
+        except _NotInRing as e:  # not a polynomial over ℚ in these symbols (a Float, a root, π, a sum in a denominator …)
             if not general:
                 raise sp.PolynomialError(str(e)) from None
         ring = cls(args)
         return ring, [sp.Poly(e.xreplace(ring.fwd), *ring.gens) for e in exprs]
 
     def _element(self, e: sp.Expr, cache: dict) -> Any:
-        """``e`` in ℚ[c, s, symbols, reciprocals], built from its tree (``ValueError`` where it is not in it)."""
+        """``e`` in ℚ[c, s, symbols, reciprocals], built from its tree (``_NotInRing`` where it is not in it)."""
         hit = cache.get(e)
         if hit is not None:
             return hit
@@ -190,11 +195,11 @@ class _TrigPolynomials:
             elif e.base in self._reciprocal_of:
                 out = self._reciprocal_of[e.base] ** int(-e.exp)
             else:
-                raise ValueError(f"a denominator {e.base} that is not a symbol")
+                raise _NotInRing(f"a denominator {e.base} that is not a symbol")
         elif e.is_Rational:  # not a Float: ℚ would silently make it rational
             out = ring.ground_new(sp.QQ(int(e.p), int(e.q)))
         else:
-            raise ValueError(f"not a polynomial over the rationals: {e}")
+            raise _NotInRing(f"not a polynomial over the rationals: {e}")
         cache[e] = out
         return out
 
@@ -265,7 +270,7 @@ class _TrigPolynomials:
 
     def diff(self, p: Any, x: sp.Symbol) -> Any:
         """∂p/∂x in the exact ring: through x, its reciprocal (∂(1/x)/∂x = −1/x²) and every c_k, s_k
-        (∂c_k/∂x = −s_k ∂a_k/∂x, ∂s_k/∂x = c_k ∂a_k/∂x); ``ValueError`` if some ∂a_k/∂x is not in the ring."""
+        (∂c_k/∂x = −s_k ∂a_k/∂x, ∂s_k/∂x = c_k ∂a_k/∂x); ``_NotInRing`` if some ∂a_k/∂x is not in the ring."""
         ring = self.ring
         x_gen, inv = self._element_of[x], self._reciprocal_of[x]
         out = p.diff(x_gen) - inv**2 * p.diff(inv)
@@ -448,7 +453,7 @@ class DeformableBody(SymbolicModel):
                 ring = self._ring
                 tidied = [[[ring.tidy(ring.diff(c, x)) for x in self.coordinates] for c in r]
                           for r in self._twin["reduced_positions"]]
-            except ValueError:  # an angle whose derivative is not a polynomial (cos √x): differentiate expressions
+            except _NotInRing:  # an angle whose derivative is not a polynomial (cos √x): differentiate expressions
                 pass
             else:
                 self._twin["position_jacobians"] = [[[p for p, _ in row] for row in J] for J in tidied]
