@@ -329,8 +329,8 @@ class DeformableBody(SymbolicModel):
         N masses (SymPy expressions or numbers), not known to be non-positive.
     positions
         N representative positions r̃_i, each 3 SymPy expressions of ``coordinates`` and
-        ``parameters``, with Σ m_i r̃_i = 0 for every shape (checked at random points with
-        30-digit arithmetic; see :func:`centred_positions`).
+        ``parameters``, with Σ m_i r̃_i = 0 for every shape (checked exactly on polynomials in sines
+        and cosines, else at random points with 30-digit arithmetic; see :func:`centred_positions`).
     coordinates
         The shape coordinates x^A (distinct SymPy symbols); the shape velocities are the
         symbols ``<name>_dot``.
@@ -380,15 +380,16 @@ class DeformableBody(SymbolicModel):
         self._ring: _TrigPolynomials | None = None
         self._twin: dict[str, Any] = {}
         n = len(self.masses)
-        try:
+        try:  # the coordinates too: a generator of the ring (for ∂/∂x^A) even if no position has x^A
             ring, polys = _TrigPolynomials.convert(
-                [*self.masses, *(c for r in self.positions for c in r), *self.velocities], general=False)
+                [*self.masses, *(c for r in self.positions for c in r), *self.velocities, *self.coordinates],
+                general=False)
         except sp.PolynomialError:
             return
         self._ring = ring
         self._twin["masses"] = polys[:n]
         self._twin["positions"] = [polys[n + 3 * i: n + 3 * i + 3] for i in range(n)]
-        self._twin["velocities"] = polys[4 * n:]
+        self._twin["velocities"] = polys[4 * n: 4 * n + self.dimension]
 
     @staticmethod
     def _symbols(values: Any, what: str, *, allow_empty: bool) -> tuple[sp.Symbol, ...]:
