@@ -566,6 +566,22 @@ def test_singular_inertia_is_reported():
         flat_at_zero.connection([0.0])  # at x = 0 all masses lie on the e1 axis
 
 
+def test_singular_shapes_are_refused_also_where_cancelling_made_omega_finite():
+    """At x = 0 all masses of this body lie on e1: L̃_1 ≡ 0, so the cancelled Ω_A has no 1/det Ĩ left and is finite
+    there; the numeric connection checks Ĩ itself.  The three-mass body keeps det Ĩ as its denominator (no check
+    needed where Ω_A is finite)."""
+    body = DeformableBody([1, 1, 1, 1], [(1, 0, x_), (-1, 0, -x_), (0, x_, 0), (0, -x_, 0)], [x_])
+    assert body.cancels_singular_factors  # before Ω is derived: assume so
+    _ = body.connection_vectors
+    assert body.cancels_singular_factors and body.connection_vectors[0, 0] == 0
+    with pytest.raises(InvalidInputError, match=r"got det Ĩ = 0"):
+        body.numeric().connection(np.array([[0.5], [0.0]]))
+    assert body.numeric().connection([0.5]).shape == (1, 3)
+    three = three_mass_body()
+    _ = three.connection_vectors
+    assert not three.cancels_singular_factors
+
+
 def test_bad_loops_are_refused(conn):
     open_path = ShapeLoop.from_expressions([X0[0] + S, X0[1] + 0 * S], S, (0.0, 1.0))
     with pytest.raises(InvalidInputError, match=r"expected a closed loop in shape space .* got a mismatch of"):

@@ -169,13 +169,17 @@ class ShapeConnection:
     def connection(self, x: Any) -> np.ndarray:
         """The vectors of Ω_A(x) (3.87), shape (..., n, 3): Ω_A = hat(row A).
 
-        Ω_A = Ĩ⁻¹L̃_A needs an invertible Ĩ: a shape with det Ĩ ≤ 0 is refused.  (Checked on Ĩ itself: the
-        derived Ω_A has the factors common to its numerator and det Ĩ cancelled, so it can stay finite
-        where Ĩ is singular — e.g. 0 for a component that vanishes identically.)
+        Ω_A = Ĩ⁻¹L̃_A needs an invertible Ĩ: a shape with det Ĩ ≤ 0 is refused.  Where Ω_A is written over
+        det Ĩ, a singular Ĩ shows as a value that is not finite, and only then is Ĩ checked; where factors
+        of det Ĩ were cancelled (:attr:`DeformableBody.cancels_singular_factors`, e.g. the cat's Ω_swivel =
+        L̃_1/Ĩ_11), Ω_A can stay finite there, and Ĩ is checked at every shape (also for a connection loaded
+        from the disk cache, whose body is not derived).
         """
         with np.errstate(divide="ignore", invalid="ignore"):  # a singular Ĩ is reported below
             out = self._call("connection", lambda body: body.connection_vectors, *self._shape(x))
-        self._check_invertible(x)
+        cancelled = self._body is None or self._body.cancels_singular_factors
+        if cancelled or not np.all(np.isfinite(out)):
+            self._check_invertible(x)
         return out
 
     def angular_velocity(self, x: Any, xdot: Any) -> np.ndarray:

@@ -576,11 +576,13 @@ class DeformableBody(SymbolicModel):
             num, den = sp.fraction(sp.together(e))
             if den.free_symbols & set(Lt) or any(sum(m) != 1 for m in sp.Poly(num, *Lt).monoms()):
                 raise DerivationError("expected the solution Ω of L = 0 linear in L̃, with a denominator free of L̃")
-            q = ring.reduce(ring.substitute(den, at))
-            if not q:
+            det = ring.reduce(ring.substitute(den, at))
+            if not det:
                 raise InvalidInputError(_SINGULAR)
-            p, q = ring.cancel(ring.reduce(ring.substitute(num, at)), q)
+            p, q = ring.cancel(ring.reduce(ring.substitute(num, at)), det)
             if len(p) + len(q) <= terms(num) + terms(den):
+                # a factor of det Ĩ divided out, not only a constant
+                self._twin["cancelled"] = self._twin.get("cancelled", False) or q * det.LC != det * q.LC
                 parts.append(("expanded", p, q))
                 # not factor_terms-ed: on these sums it costs more than it shortens (−1 % of the operations)
                 out.append(ring.expanded(p) / ring.expanded(q))
@@ -589,6 +591,15 @@ class DeformableBody(SymbolicModel):
                 out.append(num.xreplace(dict(zip(Lt, Ltilde))).xreplace(values) / den.xreplace(values))
         self._twin["angular_velocity_vector"] = parts  # what connection_vectors reads ∂v/∂ẋ^A from
         return sp.Matrix(out)
+
+    @property
+    def cancels_singular_factors(self) -> bool:
+        """Whether Ω (:attr:`angular_velocity_vector`, hence Ω_A) had factors of det Ĩ cancelled, so that it may
+        stay finite where Ĩ is singular; then :meth:`.connection.ShapeConnection.connection` checks det Ĩ at
+        every shape, not only where Ω_A is not finite.  True before Ω is derived."""
+        if not self.is_derived("angular_velocity_vector"):
+            return True
+        return bool(self._twin.get("cancelled", False))
 
     @derived
     def angular_velocity(self) -> sp.Matrix:
