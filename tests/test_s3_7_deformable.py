@@ -43,15 +43,23 @@ def _loop(radius=0.4):
 # ============================================================================ (3.92) against L = Σ m r × ṙ
 
 
-def _space_momentum_mp(body, point, v, R0, sign=1):
-    """L at t = 0 of r_i(t) = R0 exp(t hat(±v)) r̃_i(x + t ẋ), computed from Σ m r × ṙ at 50 digits.
+def _positions_mp(body):
+    """The body's masses and positions as given, as mpmath functions of (shape, parameters): lambdified once per body
+    (lambdify is the slow part), with common subexpressions taken out (the cat's positions are ~400 operations each)."""
+    syms = [*body.coordinates, *body.parameters]
+    return (sp.lambdify(syms, list(body.masses), "mpmath"),
+            sp.lambdify(syms, [list(r) for r in body.positions], "mpmath", cse=True))
+
+
+def _space_momentum_mp(body, functions, point, v, R0, sign=1):
+    """L at t = 0 of r_i(t) = R0 exp(t hat(±v)) r̃_i(x + t ẋ), computed from Σ m r × ṙ at 50 digits
+    (``functions``: :func:`_positions_mp` of the body).
 
     ṙ by the central difference (r(h) − r(−h))/2h, h = 1e-15: truncation h²|r‴|/6 ~ 1e-30,
     rounding 1e-50/h = 1e-35, far below the 1e-22 tested.
     """
-    syms = [*body.coordinates, *body.parameters]
-    pos = sp.lambdify(syms, [list(r) for r in body.positions], "mpmath")
-    masses = sp.lambdify(body.parameters, list(body.masses), "mpmath")(*[point[p] for p in body.parameters])
+    mass_function, pos = functions
+    masses = mass_function(*[point[s] for s in (*body.coordinates, *body.parameters)])
     H = mpmath.matrix(hat_mp(v)) * sign
 
     def config(t):
@@ -82,6 +90,7 @@ def test_3_92_omega_makes_the_space_angular_momentum_vanish(which, rng):
                        "mpmath")
     values = {p: cat_module.DEFAULTS[p.name] for p in body.parameters}
     numeric = body.numeric(values)
+    functions = _positions_mp(body)
     with mpmath.workdps(30):
         for _ in range(3):
             point = {s: mpmath.mpf(float(rng.uniform(-1, 1))) for s in (*body.coordinates, *body.velocities)}
@@ -89,12 +98,12 @@ def test_3_92_omega_makes_the_space_angular_momentum_vanish(which, rng):
             v = vvec(*[point[s] for s in (*body.coordinates, *body.velocities, *body.parameters)])
             q = mpmath.matrix(rng.normal(size=3).tolist())
             R0 = mpmath.expm(mpmath.matrix(hat_mp(q)))  # a random orientation
-            L = _space_momentum_mp(body, point, v, R0)
-            scale = mpmath.norm(_space_momentum_mp(body, point, [0, 0, 0], R0))  # |L| without the rotation
+            L = _space_momentum_mp(body, functions, point, v, R0)
+            scale = mpmath.norm(_space_momentum_mp(body, functions, point, [0, 0, 0], R0))  # |L| without the rotation
             assert scale > 1e-12
             # L is computed to ~1e-28 relative; Ω from (3.92) must cancel the shape's own momentum exactly.
             assert mpmath.norm(L) < 1e-22 * scale
-            wrong = _space_momentum_mp(body, point, v, R0, sign=-1)  # Ω transposed: the other sign
+            wrong = _space_momentum_mp(body, functions, point, v, R0, sign=-1)  # Ω transposed: the other sign
             assert mpmath.norm(wrong) > 1e-3 * scale
             # the compiled route agrees with the 30-digit one to rounding
             xs = np.array([float(point[s]) for s in body.coordinates])
@@ -211,9 +220,6 @@ def _numeric_connection(body, functions, point):
     return rows
 
 
-def _at(expr, point):
-    """``expr`` at ``point`` (rationals), evaluated with 45-digit Floats."""
-    return mpmath.mpf(sp.Float(sp.re(expr.xreplace({s: sp.Float(v, 45) for s, v in point.items()}).evalf(45)), 45)._mpf_)
 
 
 @pytest.mark.parametrize("make, form", [
@@ -230,9 +236,10 @@ def test_connection_equals_a_30_digit_solve_of_L_equal_0(make, form):
     assert form in {f for f, *_ in body._twin["angular_velocity_vector"]}  # the route taken (both are tested)
     rnd = random.Random(92)
     worst = mpmath.mpf(0)
-    syms = [*body.coordinates, *body.parameters]
-    functions = (sp.lambdify(syms, list(body.masses), "mpmath"),
-                 sp.lambdify(syms, [list(r) for r in body.positions], "mpmath"))
+    functions = _positions_mp(body)
+    # the derivation's expressions, evaluated at 45 digits (mpmath lambdify prints rationals as quotients of mpf)
+    arguments = [*body.coordinates, *body.velocities, *body.parameters]
+    derived = sp.lambdify(arguments, [list(rows), list(v)], "mpmath", cse=True)
     with mpmath.workdps(30):
         for _ in range(20):
             point = {s: sp.Rational(rnd.randint(-90, 90), 97) for s in (*body.coordinates, *body.velocities)}
@@ -240,11 +247,13 @@ def test_connection_equals_a_30_digit_solve_of_L_equal_0(make, form):
             mp_point = {s: mpmath.mpf(q.p) / q.q for s, q in point.items()}
             want = _numeric_connection(body, functions, mp_point)
             total = [sum(want[A][a] * mp_point[xd] for A, xd in enumerate(body.velocities)) for a in range(3)]
+            with mpmath.workdps(45):
+                got_rows, got_v = derived(*[mpmath.mpf(point[s].p) / point[s].q for s in arguments])
             for A in range(body.dimension):
                 for a in range(3):
-                    worst = max(worst, abs(_at(rows[A, a], point) - want[A][a]) / (1 + abs(want[A][a])))
+                    worst = max(worst, abs(mpmath.re(got_rows[3 * A + a]) - want[A][a]) / (1 + abs(want[A][a])))
             for a in range(3):
-                worst = max(worst, abs(_at(v[a], point) - total[a]) / (1 + abs(total[a])))
+                worst = max(worst, abs(mpmath.re(got_v[a]) - total[a]) / (1 + abs(total[a])))
     assert worst < 1e-24, worst
 
 
@@ -351,10 +360,12 @@ def test_3_103_field_strength_is_antisymmetric_and_compiled(conn, rng):
 
 def _small_loop_errors(conn, F12, sizes):
     errors = []
+    unit = [sp.cos(S) - 1, sp.sin(S) + sp.sin(2 * S) / 2]  # the loop's shape, scaled by e below
+    M12_unit = float(sp.integrate(unit[0] * sp.diff(unit[1], S), (S, 0, 2 * sp.pi)))  # ∮ a¹ da² ∝ e²
     for e in sizes:
-        a = [e * (sp.cos(S) - 1), e * (sp.sin(S) + sp.sin(2 * S) / 2)]
+        a = [e * unit[0], e * unit[1]]
         loop = ShapeLoop.from_expressions([BASE_SHAPE[0] + a[0], BASE_SHAPE[1] + a[1]], S, (0.0, 2 * np.pi))
-        M12 = float(sp.integrate(a[0] * sp.diff(a[1], S), (S, 0, 2 * sp.pi)))
+        M12 = e**2 * M12_unit
         R = net_rotation(conn, loop, rtol=1e-13).R
         errors.append(np.max(np.abs(R - (np.eye(3) + hat(F12) * M12))))  # ½(F12 M12 + F21 M21) = F12 M12
     return np.array(errors)
