@@ -91,6 +91,9 @@ SHARED_GROUPS = {
     "tests.test_s3_6_closed_form_in_time": "tests.test_s3_6_closed_form",
     "tests.test_s3_6_closed_form_in_time_bounds": "tests.test_s3_6_closed_form",
     "tests.test_s3_6_closed_form_printed": "tests.test_s3_6_closed_form",
+    # the scans of the package's source share its parsed syntax trees (tests/_package_sources.py)
+    "tests.test_layers": "tests.test_package",
+    "tests.security.test_injection": "tests.test_package",
 }
 
 

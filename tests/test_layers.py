@@ -31,6 +31,8 @@ from pathlib import Path
 
 import pytest
 
+from ._package_sources import syntax_tree
+
 PACKAGE = Path(__file__).resolve().parent.parent / "mechderive"
 #: the package itself: loaded before any of its modules and importing none at load (its public names
 #: are loaded on first use), so ``from .. import __version__`` reaches nothing above
@@ -112,7 +114,7 @@ def _imports(path: Path) -> list[tuple[str, int, bool]]:
                            if a.name == "mechderive" or a.name.startswith("mechderive."))
             visit(child, inner)
 
-    visit(ast.parse(path.read_text(encoding="utf-8"), str(path)), False)
+    visit(syntax_tree(path), False)
     return out
 
 

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import pytest
 
+from ._package_sources import syntax_tree
 from .conftest import ROOT, run_python
 
 SCRIPTS = sorted((ROOT / "derivations").glob("s*.py"))
@@ -72,7 +73,7 @@ def test_no_new_raise_of_a_builtin_exception():
     found = []
     for path in sorted(package.rglob("*.py")):
         rel = path.relative_to(package).as_posix()
-        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        for node in ast.walk(syntax_tree(path)):
             if isinstance(node, ast.Assert):
                 found.append(f"{rel}:{node.lineno}: assert (removed by python -O)")
             elif isinstance(node, ast.Raise) and node.exc is not None:

@@ -24,6 +24,7 @@ from hypothesis import strategies as st
 from mechderive.cli import main
 from mechderive.errors import InvalidInputError
 
+from .._package_sources import syntax_tree
 from ..conftest import ROOT
 
 PACKAGE = ROOT / "mechderive"
@@ -325,7 +326,7 @@ def _findings(path: Path, root: Path = PACKAGE) -> list[tuple[str, str, str, int
                     found.append((rel, inner, "sympify", child.lineno))
             visit(child, inner)
 
-    visit(ast.parse(path.read_text(), str(path)), "<module>")
+    visit(syntax_tree(path), "<module>")
     return found
 
 
