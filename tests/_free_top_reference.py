@@ -32,9 +32,8 @@ _DELTA = 2.0**-90
 class RelativeTaylor(ref.TaylorSolution):
     """A Taylor solution whose step keeps every component to its own relative accuracy."""
 
-    def _step(self) -> None:
+    def _step_size(self, c: list[list[mpmath.mpf]]) -> mpmath.mpf:
         N = self.order
-        c = self.field.series(self._y, N)
         rho = mpmath.inf
         for ci in c:
             scale = max(abs(ci[0]), abs(ci[1]), abs(ci[2]))
@@ -45,11 +44,7 @@ class RelativeTaylor(ref.TaylorSolution):
                     rho = min(rho, (scale / abs(ci[j])) ** (mpmath.mpf(1) / j))
         if rho == mpmath.inf:  # a polynomial of low degree: the series is exact
             rho = mpmath.mpf(1e3)
-        h = rho / mpmath.e ** 2
-        self.steps.append((h, c))
-        self._y = [ref._horner(ci, h) for ci in c]
-        self.starts.append(self.starts[-1] + h)
-        self.n_steps += 1
+        return rho / mpmath.e ** 2
 
 
 def _field(moments: Sequence[float], rotation: bool):

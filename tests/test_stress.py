@@ -96,6 +96,44 @@ def test_taylor_reference_agrees_with_mpmath_odefun():
         assert max(abs(a - b) for a, b in zip(taylor, other)) < mpmath.mpf(10) ** -22
 
 
+@pytest.mark.parametrize("omega", [(0.3, 1.1, -0.4), (3e5, -1.1e6, 4e5), (1e-30, 0.0, 2.0), (1e-9, 1e-9, 1e-9)],
+                         ids=["ordinary", "huge spin", "tilt 1e-30", "slow"])
+def test_fixed_point_series_equals_the_mpf_recurrence(omega):
+    """The Taylor coefficients in fixed point (integers over 2^P) against the same recurrence in mpf, and the step's
+    dense output (Horner in integers) against Horner in mpf: to 1e-30 of the state in the step's units
+    (c_k h^k), and to 1e-28 relative in every coefficient of order ≤ 2 (the step rule's, per component)."""
+    with mpmath.workdps(ref.DPS):
+        field = ref.free_top_field((1.0, 2.0, 3.5))
+        y0 = ref.free_initial_state(omega, [[0.6, 0.8, 0.0], [-0.8, 0.6, 0.0], [0.0, 0.0, 1.0]])
+        fixed = field.fixed_series(y0, 34)
+        assert fixed is not None
+        got, want = fixed.coefficients(), field.series_mp(y0, 34)
+        sol = ref.TaylorSolution(field, y0)
+        sol.extend(0)
+        h = sol.steps[0][0]
+        scale = max(abs(v) for v in y0)
+        assert max(abs(a - b) * h**k for ci, wi in zip(got, want) for k, (a, b) in enumerate(zip(ci, wi))) \
+            < mpmath.mpf(10) ** -30 * scale
+        assert max(abs(a - b) / abs(b) for ci, wi in zip(got, want) for a, b in zip(ci[:3], wi[:3]) if b) \
+            < mpmath.mpf(10) ** -28
+        for fraction in ("0", "0.37", "1"):
+            s = h * mpmath.mpf(fraction)
+            dense = sol.polynomials[0].at(s)
+            assert max(abs(a - ref._horner(ci, s)) for a, ci in zip(dense, want)) < mpmath.mpf(10) ** -30 * scale
+        # the check can fail: R11's equation dropped changes its rate, as the comparison above would see
+        wrong = ref.QuadraticField(field.n, field.pairs, field.quadratic[:3] + ((),) + field.quadratic[4:], field.linear)
+        assert abs(wrong.series(y0, 34)[3][1] - want[3][1]) > 1e-6 * abs(want[3][1]) > 0
+
+
+def test_a_polynomial_series_takes_the_mpf_route():
+    """ω = 0: every coefficient past the first vanishes, which fixed point cannot tell from underflow; mpf decides."""
+    with mpmath.workdps(ref.DPS):
+        field = ref.free_top_field((1.0, 2.0, 3.5))
+        y0 = ref.free_initial_state((0.0, 0.0, 0.0))
+        assert field.fixed_series(y0, 34) is None
+        assert field.series(y0, 34) == field.series_mp(y0, 34)
+
+
 def test_taylor_reference_free_top_conserves_energy_and_orthogonality():
     I = (1.0, 2.0, 3.0)
     with mpmath.workdps(ref.DPS):

@@ -25,6 +25,7 @@ Long times use exact symmetries instead of integrating (see :func:`monodromy_pow
 from __future__ import annotations
 
 import math
+import operator
 from dataclasses import dataclass
 from typing import Callable, Sequence
 
@@ -72,9 +73,83 @@ class QuadraticField:
             lin.append(tuple(l_))
         return cls(n, tuple(pairs), tuple(quad), tuple(lin))
 
-    def series(self, y0: Sequence[mpmath.mpf], order: int) -> list[list[mpmath.mpf]]:
-        """Taylor coefficients c[i][0..order] of the solution through y0."""
-        c = [[y] for y in y0]
+    def series(self, y0: Sequence[mpmath.mpf], order: int, step: mpmath.mpf | None = None) -> list[list[mpmath.mpf]]:
+        """Taylor coefficients c[i][0..order] of the solution through y0, at the working precision
+        (:meth:`fixed_series`, else :meth:`series_mp`)."""
+        fixed = self.fixed_series(y0, order, step)
+        return fixed.coefficients() if fixed is not None else self.series_mp(y0, order)
+
+    def fixed_series(self, y0: Sequence[mpmath.mpf], order: int,
+                     step: mpmath.mpf | None = None) -> "FixedSeries | None":
+        """The Taylor coefficients through y0 in fixed point, or None where :meth:`series_mp` must compute them.
+
+        The series is taken in s/H, d_k = c_k H^k, as integers over 2^P, with H a power of two near the step the
+        coefficients will allow (``step``, the previous step, when known).  Those d_k are all of the state's size or
+        smaller, so an absolute precision of 2^-P with P = precision + 64 bits + twice the spread of the state's
+        nonzero magnitudes keeps every coefficient that matters to the working precision, each component to its
+        own relative accuracy; the Cauchy products then run over Python integers (exact) instead of mpf dot
+        products: ~5× faster.  If the last coefficients come out with too few bits (H far too small), H is
+        enlarged and the series computed again.  None: a state beyond the fixed-point range, or a series whose
+        terms past d_1 all vanish (a polynomial).  Tests compare the two routes.
+        """
+        y0 = [mpf(y) for y in y0]
+        nonzero = [abs(y) for y in y0 if y]
+        if not nonzero:
+            return None
+        top = int(mpmath.floor(mpmath.log(max(nonzero), 2))) + 1  # |y| < 2^top
+        spread = top - int(mpmath.floor(mpmath.log(min(nonzero), 2)))
+        P = mpmath.mp.prec + 64 + 2 * spread
+        if P > _MAX_FIXED_BITS:
+            return None
+        if step is None:
+            # the field's time scale at y0, 1/(|quadratic| |y| + |linear|): a step of that order (below, H is adjusted)
+            rate = max([abs(c) for comp in self.quadratic for c, _ in comp] or [0]) * mpmath.ldexp(1, top) + \
+                max([abs(c) for comp in self.linear for c, _ in comp] or [0])
+            step = 1 / rate if rate else mpf(1)
+        exponent = int(mpmath.floor(mpmath.log(step, 2)))
+        # at the step the coefficients allow, d_N ~ tol·|y| ~ 2^-(prec - 7): about P - prec + 7 bits.  The step
+        # control needs ~20 significant bits of d_N in each component, and a component may be 2^-spread of the largest
+        target = P - mpmath.mp.prec + 7
+        for _ in range(16):
+            d = self._scaled_series(y0, order, top, exponent, P)
+            if order < 2:
+                break
+            bits = [max(abs(di[k]).bit_length() for di in d) for k in range(order + 1)]
+            if max(bits[order - 1:]) >= 24 + spread:
+                break
+            # H too small: d_k falls by ~δ bits an order; extrapolate d_N's bits from the last order left nonzero
+            # (everything past d_1 zero: a polynomial, or H far too small; mpf decides)
+            last = max((k for k in range(2, order + 1) if bits[k]), default=None)
+            if last is None:
+                return None
+            fall = (bits[1] - bits[last]) / (last - 1)
+            exponent += max(1, math.ceil((target - (bits[last] - fall * (order - last))) / order))
+        else:
+            return None
+        return FixedSeries(d, top, exponent, P)
+
+    def _scaled_series(self, y0: Sequence[mpmath.mpf], order: int, top: int, exponent: int, P: int) -> list[list[int]]:
+        """D[i][k] = round(2^P · c_ik H^k / 2^top), H = 2^exponent, by the recurrence of :meth:`series_mp` in y/2^top
+        and s/H: d_{k+1} = H/(k+1)·(2^top Σ q·(d∗d)_k + Σ l·d_k); every rounding is below one unit of 2^-P."""
+        scale_q, scale_l = mpmath.ldexp(1, top + exponent), mpmath.ldexp(1, exponent)
+        quadratic = [[(_fixed(c * scale_q, P), p) for c, p in comp] for comp in self.quadratic]
+        linear = [[(_fixed(c * scale_l, P), a) for c, a in comp] for comp in self.linear]
+        d = [[_fixed(mpmath.ldexp(y, -top), P)] for y in y0]
+        half = 1 << (P - 1)
+        for k in range(order):
+            products = [(sum(map(operator.mul, d[a][: k + 1], d[b][k::-1])) + half) >> P for a, b in self.pairs]
+            for i in range(self.n):
+                acc = 0
+                for c, p in quadratic[i]:
+                    acc += c * products[p]
+                for c, a in linear[i]:
+                    acc += c * d[a][k]
+                d[i].append(((acc + half) >> P) // (k + 1))
+        return d
+
+    def series_mp(self, y0: Sequence[mpmath.mpf], order: int) -> list[list[mpmath.mpf]]:
+        """:meth:`series` in mpf arithmetic: c_{k+1} = F_k/(k + 1), each product's coefficient an exact dot product."""
+        c = [[mpf(y)] for y in y0]
         fdot = mpmath.fdot
         for k in range(order):
             prods = [fdot(c[a][: k + 1], c[b][k::-1]) for a, b in self.pairs]
@@ -86,6 +161,81 @@ class QuadraticField:
                     s += coef * c[a][k]
                 c[i].append(s / (k + 1))
         return c
+
+
+#: beyond this many bits of fixed point (a state whose components span ~10^2800) the series is computed in mpf
+_MAX_FIXED_BITS = 20_000
+
+
+def _fixed(x: mpmath.mpf, P: int) -> int:
+    """round(x·2^P), exactly from x's mantissa."""
+    sign, man, exp, _ = mpf(x)._mpf_
+    shift = exp + P
+    value = int(man) << shift if shift >= 0 else (int(man) + (1 << (-shift - 1))) >> -shift
+    return -value if sign else value
+
+
+@dataclass(frozen=True)
+class FixedSeries:
+    """Taylor coefficients in fixed point: c_ik = d[i][k] · 2^(top - P) / H^k, H = 2^exponent."""
+
+    d: list[list[int]]
+    top: int
+    exponent: int
+    P: int
+
+    def coefficients(self) -> list[list[mpmath.mpf]]:
+        """The c_ik as mpf at the working precision."""
+        make, from_man_exp, prec = mpmath.mp.make_mpf, mpmath.libmp.from_man_exp, mpmath.mp.prec
+        base = self.top - self.P
+        return [[make(from_man_exp(v, base - self.exponent * k, prec, "n")) for k, v in enumerate(di)] for di in self.d]
+
+    def polynomial(self, h: mpmath.mpf) -> "StepPolynomial":
+        """The series over one step of length h, as a polynomial in s/h (e_k = d_k (h/H)^k, integer arithmetic)."""
+        P, half = self.P, 1 << (self.P - 1)
+        ratio = _fixed(mpmath.ldexp(h, -self.exponent), P)
+        powers = [1 << P]
+        for _ in range(len(self.d[0]) - 1):
+            powers.append((powers[-1] * ratio + half) >> P)
+        return StepPolynomial([[(v * w + half) >> P for v, w in zip(di, powers)] for di in self.d], h, self.top, P)
+
+
+class StepPolynomial:
+    """y(t0 + s) = Σ_k e_k (s/h)^k for 0 ≤ s ≤ h, each e_k an integer over 2^P in units of 2^top.
+
+    In s/h ≤ 1 the terms e_k fall like e^(-2k) (the step rule below), so Horner's rule in integers loses at most
+    one unit of 2^-P a term: ~100 times faster than Horner in mpf, for the dense output at every sample time.
+    """
+
+    def __init__(self, e: list[list[int]], h: mpmath.mpf, top: int, P: int) -> None:
+        self.e, self.h, self.top, self.P = e, h, top, P
+
+    @classmethod
+    def from_coefficients(cls, c: Sequence[Sequence[mpmath.mpf]], h: mpmath.mpf) -> "StepPolynomial":
+        """From mpf coefficients c_ik (the :meth:`QuadraticField.series_mp` route)."""
+        values = [abs(v) for ci in c for v in ci[:1] if v] or [mpf(1)]
+        top = int(mpmath.floor(mpmath.log(max(values), 2))) + 1
+        P = mpmath.mp.prec + 64 + 2 * (top - int(mpmath.floor(mpmath.log(min(values), 2))))
+        hk = [mpmath.ldexp(h ** k, -top) for k in range(len(c[0]))]
+        return cls([[_fixed(v * w, P) for v, w in zip(ci, hk)] for ci in c], h, top, P)
+
+    def at(self, s: mpmath.mpf) -> list[mpmath.mpf]:
+        """y(t0 + s), 0 ≤ s ≤ h."""
+        P = self.P
+        u = _fixed(s / self.h, P)
+        make, from_man_exp, prec = mpmath.mp.make_mpf, mpmath.libmp.from_man_exp, mpmath.mp.prec
+        out = []
+        for ei in self.e:
+            acc = 0
+            for v in reversed(ei):
+                acc = ((acc * u) >> P) + v
+            out.append(make(from_man_exp(acc, self.top - P, prec, "n")))
+        return out
+
+    def end(self) -> list[mpmath.mpf]:
+        """y(t0 + h): the sum of the terms."""
+        make, from_man_exp, prec = mpmath.mp.make_mpf, mpmath.libmp.from_man_exp, mpmath.mp.prec
+        return [make(from_man_exp(sum(ei), self.top - self.P, prec, "n")) for ei in self.e]
 
 
 def _rotation_terms() -> list[list[tuple]]:
@@ -129,6 +279,7 @@ class TaylorSolution:
         self.order = int(math.ceil(-float(mpmath.log(self.tol)) / 2)) + 1
         self.starts: list[mpmath.mpf] = [mpf(0)]
         self.steps: list[tuple[mpmath.mpf, list[list[mpmath.mpf]]]] = []
+        self.polynomials: list[StepPolynomial] = []
         self._y = [mpf(v) for v in y0]
         self.n_steps = 0
 
@@ -138,8 +289,20 @@ class TaylorSolution:
 
     def _step(self) -> None:
         N = self.order
-        c = self.field.series(self._y, N)
-        scale = max(mpf(1), max(abs(v) for v in self._y))
+        fixed = self.field.fixed_series(self._y, N, self.steps[-1][0] if self.steps else None)  # last step: H's guess
+        c = fixed.coefficients() if fixed is not None else self.field.series_mp(self._y, N)
+        h = self._step_size(c)
+        polynomial = fixed.polynomial(h) if fixed is not None else StepPolynomial.from_coefficients(c, h)
+        self.steps.append((h, c))
+        self.polynomials.append(polynomial)
+        self._y = polynomial.end()
+        self.starts.append(self.starts[-1] + h)
+        self.n_steps += 1
+
+    def _step_size(self, c: list[list[mpmath.mpf]]) -> mpmath.mpf:
+        """h = ρ/e², ρ from the last two coefficients against the state's largest component (Jorba & Zou)."""
+        N = self.order
+        scale = max(mpf(1), max(abs(ci[0]) for ci in c))
         rho = mpmath.inf
         for j in (N - 1, N):
             size = max(abs(ci[j]) for ci in c)
@@ -147,11 +310,7 @@ class TaylorSolution:
                 rho = min(rho, (scale / size) ** (mpf(1) / j))
         if rho == mpmath.inf:  # a polynomial of degree < N - 1: the series is exact (steady motion)
             rho = mpf(1e3)
-        h = rho / mpmath.e ** 2
-        self.steps.append((h, c))
-        self._y = [_horner(ci, h) for ci in c]
-        self.starts.append(self.starts[-1] + h)
-        self.n_steps += 1
+        return rho / mpmath.e ** 2
 
     def extend(self, t: mpmath.mpf) -> None:
         """Integrate on until t_end ≥ t."""
@@ -165,9 +324,7 @@ class TaylorSolution:
             raise InvalidInputError(f"expected t >= 0, got {t}")
         self.extend(t)
         k = _bisect(self.starts, t)
-        h, c = self.steps[k]
-        s = t - self.starts[k]
-        return [_horner(ci, s) for ci in c]
+        return self.polynomials[k].at(t - self.starts[k])
 
     def derivative(self, t, component: int) -> mpmath.mpf:
         """dy_component/dt at t (from the step's polynomial)."""
