@@ -22,8 +22,10 @@ GYRO = (0.010625, 0.00125, 1.0, 9.81, 0.1)
 
 # --- (3.80)-(3.81): uniform precession ---------------------------------------------------------------
 
+@functools.cache
 def _generated_functions() -> dict:
-    """What ``mechderive derive heavy_top precession_rates minimum_spin --format python`` prints, exec'd."""
+    """What ``mechderive derive heavy_top precession_rates minimum_spin --format python`` prints, exec'd (once: the
+    tests only call the functions)."""
     from mechderive.derive import derive_entries, render
 
     src = render(derive_entries("heavy_top", ["precession_rates", "minimum_spin"]), "python", system="heavy_top")

@@ -86,7 +86,8 @@ def to_state_symbols(expr: Any) -> Any:
             if order not in _SUFFIX:
                 raise InvalidInputError(f"expected derivatives of order <= 2, got order {order} in {d}")
             subs[d] = state_symbol(d.expr.func.__name__ + _SUFFIX[order])
-    # Derivatives first, so that q(t) inside them is not replaced first.
-    expr = expr.subs(subs)
+    # Derivatives first, so that q(t) inside them is not replaced first.  xreplace: each replaced node is an exact
+    # subtree, so the structural replacement gives what subs would, without subs' search and re-evaluation
+    expr = expr.xreplace(subs)
     funcs = {f: state_symbol(f.func.__name__) for f in expr.atoms(sp.core.function.AppliedUndef) if f.args == (t,)}
-    return expr.subs(funcs)
+    return expr.xreplace(funcs)
