@@ -244,9 +244,7 @@ class _Estimator:
     def _start(self) -> dict[str, float]:
         """1 ∓ u, θ, θ̇ at t = 0 by the evaluation's path (one point)."""
         def make():
-            from .exact import _Pass
-
-            p0 = _Pass(self.sol, np.zeros(1))
+            p0 = self.sol._at_start
             x, y = p0.one_minus_plus_u()
             out = {"x": float(x[0]), "y": float(y[0]), "theta": float(self.sol._quantity(p0, "theta")[0]),
                    "theta_dot": float(self.sol._quantity(p0, "theta_dot")[0])}
@@ -317,8 +315,6 @@ class _Estimator:
     def _angle_check(self, which: str) -> dict[str, float]:
         """φ(t_i) − φ0 (or ψ, σ, δ) at the picked samples against F(v(t_i)) − F(v0), F the integral of the
         derived rate over the phase (:meth:`_cumulative`), plus the rounding of what is output."""
-        from .exact import _Pass
-
         sol, ps = self.sol, self.ps
         if sol._period is None:  # m = 1 exactly (no period): no quadrature in the phase; say so
             return {"continuous": math.inf, "wrapped": math.inf}
@@ -328,7 +324,7 @@ class _Estimator:
                  "sigma": 0.5 * (sol.initial["phi"] + sol.initial["psi"]),
                  "delta": 0.5 * (sol.initial["phi"] - sol.initial["psi"])}[which]
         picks = self._picks()
-        q0, d0 = self._once("start_phase", lambda: self._phase_points(_Pass(sol, np.zeros(1))))
+        q0, d0 = self._once("start_phase", lambda: self._phase_points(sol._at_start))
         q, d = self._get("phase_points", lambda: self._phase_points(ps))
         q, d = q.ravel()[picks], d.ravel()[picks]
         # the start and the picked samples in one call: their segments' rates in one evaluation
