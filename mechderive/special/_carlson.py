@@ -60,7 +60,7 @@ def elliprf(x, y, z):
     scale = np.ones_like(A)  # 4⁻ⁿ
     with np.errstate(all="ignore"):
         for _ in range(_MAX_STEPS):
-            if np.all(scale * Q < np.abs(A)):
+            if (scale * Q < np.abs(A)).all():
                 break
             sx, sy, sz = np.sqrt(x), np.sqrt(y), np.sqrt(z)
             lam = sx * sy + sx * sz + sy * sz
@@ -84,7 +84,7 @@ def elliprc(x, y):
     scale = np.ones_like(A)
     with np.errstate(all="ignore"):
         for _ in range(_MAX_STEPS):
-            if np.all(scale * Q < np.abs(A)):
+            if (scale * Q < np.abs(A)).all():
                 break
             lam = 2 * np.sqrt(x) * np.sqrt(y) + y
             x, y, A = (x + lam) / 4, (y + lam) / 4, (A + lam) / 4
@@ -106,14 +106,14 @@ def _rc_one(e):
         e = e.astype(float)
     series = 1 - e * (1 / 3 - e * (1 / 5 - e * (1 / 7 - e * (1 / 9 - e * (1 / 11 - e / 13)))))
     small = np.abs(e) < 1e-3
-    if np.all(small):
+    if small.all():
         return series
     with np.errstate(all="ignore"):
         r = np.sqrt(np.abs(e))
         positive = e > 0
-        if np.all(positive | small):
+        if (positive | small).all():
             closed = np.arctan(r) / r
-        elif np.all(~positive | small):
+        elif (~positive | small).all():
             closed = np.arctanh(r) / r
         else:
             closed = np.where(positive, np.arctan(r), np.arctanh(r)) / r
@@ -138,7 +138,7 @@ def _rj_positive(x, y, z, p):
     total = 0.0
     with np.errstate(all="ignore"):
         for _ in range(_MAX_STEPS):
-            if np.all(scale * Q < np.abs(A)):
+            if (scale * Q < np.abs(A)).all():
                 break
             sx, sy, sz, sp = np.sqrt(x), np.sqrt(y), np.sqrt(z), np.sqrt(p)
             lam = sx * sy + sx * sz + sy * sz

@@ -43,7 +43,7 @@ def _fast_two_sum(a, b):
 def _split(a):
     """Veltkamp split a = hi + lo, each with <= 26 significant bits."""
     big = np.abs(a) > _BIG
-    if np.any(big):
+    if big.any():  # (the method, not np.any's wrapper: every TwoProduct splits twice)
         a_s = np.where(big, a * 2.0**-54, a)
         hi, lo = _split(a_s)
         scale = np.where(big, 2.0**54, 1.0)

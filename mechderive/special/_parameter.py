@@ -126,7 +126,7 @@ def _quarter_period(m1_hi: np.ndarray, m1_lo: np.ndarray) -> tuple[np.ndarray, n
     ah, al = np.ones_like(bh), np.zeros_like(bh)
     for _ in range(64):
         dh, dl = dd_add(ah, al, -bh, -bl)
-        if np.all(np.abs(dh) <= 1e-17 * ah):
+        if (np.abs(dh) <= 1e-17 * ah).all():
             break
         nh, nl = dd_add(ah, al, bh, bl)
         ph, pl = dd_mul(ah, al, bh, bl)

@@ -57,7 +57,7 @@ def _agm_levels(m1: np.ndarray):
         c = np.where(done, c, c_new)
         n_levels = np.where(done, n_levels, level)
         done = done | (np.abs(a - b) <= _AGM_TOL * a)
-        if np.all(done):
+        if done.all():
             break
         emc = np.where(done, emc, a * b)
         a = np.where(done, a, c_new)
@@ -87,7 +87,7 @@ def _sncndn_small(v: np.ndarray, v_lo: np.ndarray, m: np.ndarray, levels, g_hi, 
         dn_new = (b_levels[i] + a_new) / (b + a_new)
         a_new = c_new / b
         active = i < n_levels
-        if np.all(active):
+        if active.all():
             a, c, dn = a_new, c_new, dn_new
         else:
             a, c, dn = np.where(active, a_new, a), np.where(active, c_new, c), np.where(active, dn_new, dn)

@@ -253,11 +253,10 @@ class _Pass:
         relative error 1e-16/|cn| in cn, and in φ̇, ψ̇ ∝ 1/(1 - u) (at θ0 = 1e-16 φ̇(0) came out
         0.75 rad/s off).
         """
-        from ...special._parameter import parameter
         from ...special._sncndn import reduced_sn_cn_dn
 
         def make():
-            p = parameter(self.sol.m, self.sol.m1)
+            p = self.sol._jacobi_parameter
             if self.sol._period is None:  # m = 1: no period, r is the phase itself
                 _, rh, rl = self.phase_dd()
                 return reduced_sn_cn_dn(np.asarray(rh + rl, dtype=float), p)[:4]
@@ -403,7 +402,7 @@ class _Pass:
             half = sol._period.hi / 2  # K: the pole at v = K (mod 2K), the bottom at v = 0 (mod 2K)
             # the phase at t = 0 by the same arithmetic: v0 = F(A0|m) lies in [-K, K], so its period
             # count j0 is -1 when the start is just before a bottom passage (v0 < 0)
-            j0, r0 = (float(x[0]) for x in sol._phase(np.zeros(1)))
+            j0, r0 = (float(x[0]) for x in sol._at_start.phase())
             count = np.zeros(self.t.shape)
             if sol._one_minus_u2 == 0.0:
                 count = count + (j + (r >= half)) - (j0 + (r0 >= half))
@@ -619,10 +618,25 @@ class HeavyTopSolution:
         return float((2.0**52 * K - abs(self._v0.hi)) / math.ldexp(self._kappa.hi, self._kappa.exp))
 
     @functools.cached_property
+    def _at_start(self) -> _Pass:
+        """One pass at t = 0, by the path every time goes through, shared by all that needs the start: its
+        phase (:attr:`_phase0`, the passages' count), Π(n; am v0) of the angles' constants and the error
+        estimate's checks of the start (each had made its own single-point pass, the phase four times)."""
+        return _Pass(self, np.zeros(1))
+
+    @functools.cached_property
     def _phase0(self) -> tuple[float, float, float]:
         """(j0, r0_hi, r0_lo): the reduced phase at t = 0, by the arithmetic every time goes through."""
-        j, rh, rl = self._phase_dd(np.zeros(1))
+        j, rh, rl = self._at_start.phase_dd()
         return float(j[0]), float(rh[0]), float(rl[0])
+
+    @functools.cached_property
+    def _jacobi_parameter(self) -> Any:
+        """m, 1 − m and K(m) as the Jacobi functions take them (:func:`mechderive.special._parameter.parameter`):
+        validated once per motion, not again by every pass (the samples, the start, the quadrature nodes)."""
+        from ...special._parameter import parameter
+
+        return parameter(self.m, self.m1)
 
     @functools.cached_property
     def _angles(self) -> dict[str, _Angle]:
@@ -1290,7 +1304,7 @@ def _angle_setup(sol: HeavyTopSolution, fractions: dict | None = None, one_minus
     # ψ(0) = ψ0 to rounding, also where Π is huge (n → 1 near the pole, ~1/√(1 - n)) or
     # ill-conditioned in the amplitude (m → 1: Π(n; A | m) from a rounded A0 next to π/2 erred
     # 7e-12 at m1 = 3e-13, and φ(0) with it)
-    at_start = _Pass(sol, np.zeros(1))
+    at_start = sol._at_start
     at_start.pis([float(n) for n in ns])
     pi0 = {n: float(at_start.pi(float(n))[0]) for n in ns}
     out = {}
