@@ -13,6 +13,7 @@ which :func:`check_params` refuses; the motion depends on M g l only (checked be
 
 from __future__ import annotations
 
+import functools
 import math
 
 import mpmath
@@ -195,11 +196,13 @@ def test_invariants_are_the_chapters_and_conserved_symbolically():
         assert p_psi == pytest.approx(I3 * w3, abs=1e-14)
 
 
-def _mp_stage(dps: int = 40):
+@functools.cache
+def _mp_stage():
+    """The derived stage map (free drift h_free, then kick h_kick) as an mpmath function, lambdified once."""
     m = rigid_model.model()
     args = [*rigid_model.momentum_symbols(), *rigid_model.quaternion_symbols(), rigid_model.h_free,
             rigid_model.h_kick, *rigid_model.parameters()]
-    return sp.lambdify(args, list(m.stage_map), modules="mpmath")
+    return sp.lambdify(args, list(m.stage_map), modules="mpmath", cse=True)
 
 
 def _mp_field(y, I1, I3, mgl):
