@@ -125,9 +125,12 @@ def test_phi_bound_is_half_an_ulp_plus_the_inversion_after_a_thousand_orbits(ini
     """201 samples over 1000.37 orbits (φ ≈ 6285): the inversion goes on to the double nearest the root wherever t's
     rounding allows (t(φ) − t formed without t's own rounding), so φ = φ(0) + s is within one ulp of the largest φ
     (measured: half an ulp), and its bound, half an ulp plus |t(φ) − t|·|φ̇|, below 1.1 ulp of it.  Before: errors of 3
-    and 1.1 ulp (e = 0.45, 0.9), bounded by 5.5e-12 (6 ulp) and 8.4e-11 (92 ulp).  r, ṙ, φ̇ are bounded within 32× of
-    their largest error (measured 1.02× for e = 0.45, where the inversion's fraction of an ulp of φ, known from the
-    residual, is most of both; 16× for φ̇ at e = 0.9, the model's floor 4ε(|φ̇| + |dφ̇/dφ|/κ) at periapsis)."""
+    and 1.1 ulp (e = 0.45, 0.9), bounded by 5.5e-12 (6 ulp) and 8.4e-11 (92 ulp).  r, ṙ, φ̇ are bounded within 64× of
+    their largest error: they are moved from the double φ to the root to first order (``TimedOrbit.columns``), so
+    their leading term is no longer the inversion's known fraction of an ulp of φ (1.02× when it was) but the
+    residual's own error times |dX/dφ|/|dt/dφ|, bounded by t's first-order rounding bound, which the run measures at
+    0.05 of it (measured: 9×, 23×, 19× for e = 0.45; 9×, 60×, 22× for e = 0.9, ṙ's largest error, 2.8e-15, at one of
+    the 201 samples away from periapsis)."""
     motion = _motion(initial)
     times = np.linspace(0.0, 1000.37 * float(motion.period), 201)
     errors, bounds = _check_bounds(initial, times, hyperbola=False)
@@ -135,7 +138,7 @@ def test_phi_bound_is_half_an_ulp_plus_the_inversion_after_a_thousand_orbits(ini
     assert np.max(errors["phi"]) <= ulp
     assert np.max(bounds["phi"]) <= 1.1 * ulp
     for name in ("r", "r_dot", "phi_dot"):
-        assert np.max(bounds[name]) <= 32 * np.max(errors[name]), name
+        assert np.max(bounds[name]) <= 64 * np.max(errors[name]), name
 
 
 def test_circular_orbit_bound():
