@@ -1,6 +1,7 @@
 """§3.6 generalised (issue 16): the error bound of a motion solved in t from an orbit along a cyclic coordinate (Kepler's
 t(φ) inverted) holds at every sample, near a hyperbola's asymptote and over long ellipse runs, and is tight; and the
-outputs other than φ, moved from the inverted double φ to the exact root, are a few ulp off after 1000 orbits, not ~1000.
+outputs other than φ, moved from the inverted double φ to the exact root, are a few ulp off after 1000 orbits (not
+~1000).
 
 The bound (:meth:`mechderive.systems.lagrangian.timed.TimedOrbit.error_bounds`) is per sample; the run's estimate is
 its largest value.  Reference, independent of the closed form: Kepler's equation M = E − e sin E (M = e sinh H − H)
@@ -148,7 +149,8 @@ def _ulps(errors, got):
     return {n: float(np.max(errors[n]) / np.spacing(np.max(np.abs(got[n])))) for n in NAMES}
 
 
-# r, ṙ, φ̇ at the root: the largest error in ulp of the column's scale allowed, and (before the step to the root) measured
+# r, ṙ, φ̇ at the root: the largest error allowed, in ulp of the column's scale (measured now, and before the step to
+# the root)
 AT_THE_ROOT = {
     # a handful: the doubles' own error at fixed φ, k·ε(|X| + |dX/dφ|/κ), k ≤ 6 (measured 2.5, 5.3, 2.6; before 1005,
     # 2894, 982: the half ulp of φ ≈ 6300 times the rate along φ)

@@ -514,9 +514,9 @@ class ClosedMotion:
             return np.polyder([float(c) for c in p1]) if len(p1) > 1 else np.zeros(1)
 
     def _rate_slope(self, name: str, t: np.ndarray, jac: tuple, value: np.ndarray) -> np.ndarray:
-        """d/dτ of the cyclic rate ``name``, R = N(u)/D(u) (``value`` = R at τ, :meth:`_rate_values`): Ṙ = u̇·(N'(u)/D(u)
-        − R·D'(u)/D(u)), D'/D = rest'/rest + Σ 1/(u − p_j) with u − p_j from the nearer end of the motion as in R
-        itself (Kepler's dt/dφ = 1/(ℓu²) near the asymptote u → 0 keeps its digits)."""
+        """d/dτ of the cyclic rate ``name``, R = N(u)/D(u) (``value`` = R at τ, :meth:`_rate_values`):
+        Ṙ = u̇·(N'(u)/D(u) − R·D'(u)/D(u)), D'/D = rest'/rest + Σ 1/(u − p_j) with u − p_j from the nearer end of the
+        motion as in R itself (Kepler's dt/dφ = 1/(ℓu²) near the asymptote u → 0 keeps its digits)."""
         num, lead, poles, rest = self.rate_poles(name)
         mo = self.motion
         u, u_dot = mo.u(t, jac), mo.u_dot(t, jac)

@@ -86,9 +86,9 @@ class TimedOrbit:
 
     estimate_kind = ("absolute, in the outputs' units, a bound at every sample: the doubles' error at the sample's c "
                      "from a rounding model calibrated against 30 digits at up to 8 of the times, plus, for c, "
-                     "|c − c*| ≤ (|t(c) − t| + the residual's error)·|dc/dt|; the other outputs are moved to c* to first "
-                     "order, and bounded by their rate along c times the residual's error·|dc/dt| and the second-order "
-                     "remainder")
+                     "|c − c*| ≤ (|t(c) − t| + the residual's error)·|dc/dt|; the other outputs are moved to c* to "
+                     "first order, and bounded by their rate along c times the residual's error·|dc/dt| and the "
+                     "second-order remainder")
     #: the estimate bounds every sample (the run's report needs no floor of a column's rounding)
     bounds_every_sample = True
 
@@ -478,13 +478,16 @@ class TimedOrbit:
                 up, down = s + h, s - h
                 plus, minus = self._slopes(up, *self._orbit_at(up)), self._slopes(down, *self._orbit_at(down))
                 for n in outputs:
-                    curve[n] = 2 * np.maximum(np.abs(plus[n] - slope[n]) / (up - s), np.abs(slope[n] - minus[n]) / (s - down))
-                curve["t_dot"] = 2 * np.maximum.reduce([np.abs(slope["t_dot"]), np.abs(plus["t_dot"]), np.abs(minus["t_dot"])])
+                    curve[n] = 2 * np.maximum(np.abs(plus[n] - slope[n]) / (up - s),
+                                              np.abs(slope[n] - minus[n]) / (s - down))
+                curve["t_dot"] = 2 * np.maximum.reduce([np.abs(slope["t_dot"]), np.abs(plus["t_dot"]),
+                                                        np.abs(minus["t_dot"])])
             # |step − (s* − s)|: 0 = t(s*) − t = ρ + T·(s* − s) + ½t''(ξ)(s* − s)², the step −ρ̂/T̂ taken from the
             # residual as formed (its error t_error) and T = dt/ds at s (its relative error ċ's at fixed s, ċ = 1/T;
             # the division's rounding ε)
             scale_rate, floor_rate = model(c + "_dot")
-            relative_rate = max(floor_rate, SAFETY * factors.get(c + "_dot", 0.0)) * scale_rate / np.abs(here[c + "_dot"])
+            k_rate = max(floor_rate, SAFETY * factors.get(c + "_dot", 0.0))
+            relative_rate = k_rate * scale_rate / np.abs(here[c + "_dot"])
             step_error = (t_error + 0.5 * curve["t_dot"] * delta_s**2) / rate_abs + (relative_rate + eps) * np.abs(step)
             out = {c: 0.5 * np.spacing(np.abs(here[c])) + delta_s}
             for name in outputs:
@@ -496,7 +499,8 @@ class TimedOrbit:
                              # the slope's rounding, modelled as its value's one order up (X' for X, X''·L for X'L):
                              # it enters times |step| ≤ δs, ~ulp(s) of the model's term
                              + k * eps * (np.abs(slope[name]) + curve[name] * length) * np.abs(step)
-                             + eps * (np.abs(here[name]) + np.abs(slope[name] * step)))  # the product's and sum's rounding
+                             # the product's and the sum's rounding
+                             + eps * (np.abs(here[name]) + np.abs(slope[name] * step)))
         for name, values in out.items():
             if not np.all(np.isfinite(values)):
                 i = int(np.argmax(~np.isfinite(values)))
