@@ -852,6 +852,39 @@ def test_auto_takes_the_closed_form_and_it_agrees_with_integration(name, coordin
         assert drift <= 1e-12
 
 
+SLOPE_SYSTEMS = ["pendulum libration", "pendulum rotation backwards", "spherical pendulum",
+                 "spherical pendulum through the pole", "anharmonic well (u = x²)", "double well, over the hump",
+                 "pendulum on the separatrix"]
+
+
+@pytest.mark.parametrize("name", SLOPE_SYSTEMS)
+def test_second_derivatives_agree_with_differences_of_the_rates(name):
+    """q̈ (:meth:`ClosedMotion._q_ddot`, per kind: g⁻¹'s branch, a rotation, through a fold — asin and the identity of
+    u = x² —, on a separatrix) and each cyclic rate's slope (``_rate_slope``), which a motion solved in t through an
+    orbit uses to move its outputs to the root (issue 16), against central differences of q̇ and ċ over ±h, h = 1e-5
+    of the time scale, at 13 times over two periods: the difference's truncation ~h²/6·(the fourth derivative), its
+    rounding ~ε/h, both ≲ 1e-8 of the scale; a wrong sign or term is O(1)."""
+    from mechderive.systems.lagrangian.closed import closed_motion
+
+    _, coordinates, lagrangian, parameters, initial, _ = next(s for s in SYSTEMS if s[0] == name)
+    scene = _scene(coordinates, lagrangian, parameters, initial)
+    motion = closed_motion(scene.model, scene.parameters, scene.initial)
+    scale = motion.time_scale
+    t = np.linspace(0.03, 2.03, 13) * scale
+    h = 1e-5 * scale
+    r = motion.remaining
+    names = [r, r + "_dot", *(c + "_dot" for c in motion.cyclic)]
+    plus, minus = motion.columns(t + h, names), motion.columns(t - h, names)
+    jac = motion.motion.jacobi(t)
+    here = motion.columns(t, names, jac=jac)
+    pairs = [(motion._q_ddot(t, jac, here[r], here[r + "_dot"]), r + "_dot")]
+    pairs += [(motion._rate_slope(c, t, jac, here[c + "_dot"]), c + "_dot") for c in motion.cyclic]
+    for got, rate in pairs:
+        difference = (plus[rate] - minus[rate]) / (2 * h)
+        size = np.max(np.abs(difference)) + np.max(np.abs(here[rate])) / scale
+        assert np.max(np.abs(got - difference)) <= 1e-6 * size, (rate, np.max(np.abs(got - difference)) / size)
+
+
 def test_accelerating_pivot_is_the_top_in_g_plus_a():
     """The inertial-frame Lagrangian of a top whose pivot rises as a t²/2 depends on t only through a total
     derivative: the closed form is the top's with g + a, checked against integrating that L itself."""

@@ -410,23 +410,7 @@ class ClosedMotion:
                     self.S * shape.scale * float(mo.kappa) * jac[2])
         if self.kind == "libration through a fold":
             sigma, sigma_dot = mo.signed_root(self.end, t, jac)
-            x = sigma / np.sqrt(2.0)
-            if shape.local == "asin":
-                with np.errstate(divide="ignore"):  # x = ±1 at the other fold: replaced below
-                    f, df = np.arcsin(np.clip(x, -1.0, 1.0)), 1.0 / np.sqrt(np.maximum(1.0 - x * x, 0.0))
-                if self.other_fold is not None:
-                    # near the other fold (|u − u_o| = 2(1 − x²), |u_e − u_o| = 2) take 1 − x² from u − u_o at the
-                    # nearer end of the motion: a separatrix approaches it exponentially, where 1 − x² from x would
-                    # round to 0 (θ = π exactly, θ̇ = NaN)
-                    with np.errstate(all="ignore"):
-                        rest = np.abs(mo.minus(self.other_fold, t, jac)) / 2.0
-                        far = x * x > 0.5
-                        f = np.where(far, np.sign(x) * (np.pi / 2 - np.arcsin(np.sqrt(rest))), f)
-                        df = np.where(far, 1.0 / np.sqrt(rest), df)
-            elif shape.local == "asinh":
-                f, df = np.arcsinh(x), 1.0 / np.sqrt(1.0 + x * x)
-            else:
-                f, df = x, np.ones_like(x)
+            _, f, df = self._fold_local(sigma, t, jac)
             # on a separatrix, far along, u − u_o and σ̇ both underflow (e^{-2κt}, κt ≳ 350): q̇ is below the
             # smallest double there, not ∞ · 0
             with np.errstate(invalid="ignore"):
@@ -454,8 +438,106 @@ class ClosedMotion:
             qd = mo.u_dot(t, jac) / shape.dg(q)
         return q, qd
 
-    def columns(self, t: np.ndarray, wanted: Sequence[str]) -> dict:
-        """The requested state columns (q, q_dot of every coordinate) at the times ``t``."""
+    def _fold_local(self, sigma: np.ndarray, t: np.ndarray, jac: tuple) -> tuple:
+        """(x, f(x), f'(x)) at x = σ/√2 for a motion through a fold (see the module docstring, step 3)."""
+        mo, shape = self.motion, self.shape
+        x = sigma / np.sqrt(2.0)
+        if shape.local == "asin":
+            with np.errstate(divide="ignore"):  # x = ±1 at the other fold: replaced below
+                f, df = np.arcsin(np.clip(x, -1.0, 1.0)), 1.0 / np.sqrt(np.maximum(1.0 - x * x, 0.0))
+            if self.other_fold is not None:
+                # near the other fold (|u − u_o| = 2(1 − x²), |u_e − u_o| = 2) take 1 − x² from u − u_o at the
+                # nearer end of the motion: a separatrix approaches it exponentially, where 1 − x² from x would
+                # round to 0 (θ = π exactly, θ̇ = NaN)
+                with np.errstate(all="ignore"):
+                    rest = np.abs(mo.minus(self.other_fold, t, jac)) / 2.0
+                    far = x * x > 0.5
+                    f = np.where(far, np.sign(x) * (np.pi / 2 - np.arcsin(np.sqrt(rest))), f)
+                    df = np.where(far, 1.0 / np.sqrt(rest), df)
+        elif shape.local == "asinh":
+            f, df = np.arcsinh(x), 1.0 / np.sqrt(1.0 + x * x)
+        else:
+            f, df = x, np.ones_like(x)
+        return x, f, df
+
+    def _q_ddot(self, t: np.ndarray, jac: tuple, q: np.ndarray, q_dot: np.ndarray) -> np.ndarray:
+        """q̈ = d²q/dτ² (τ = t, or c − c(0) along an orbit) in doubles, from q and q̇ at the same τ (:meth:`_q`).  From
+        u̇² = P(u), ü = P'(u)/2 on every motion; then per kind:
+
+        - on g⁻¹'s branch, u = g(q): ü = g''(q) q̇² + g'(q) q̈, so q̈ = (P'(u)/2 − g''(q) q̇²)/g'(q) (g'' from the
+          substitution itself; g' ≠ 0 there: a motion reaching a fold is read from σ below, or refused);
+        - a rotation, q = q_a + S·scale·am(v), q̇ = S·scale·κ dn: q̈ = −S·scale·κ² m sn cn (dn' = −m sn cn);
+        - through a fold e, q = q_e + ε·scale·f(x), x = σ/√2, σ² = |u − e|: with P(u) = (u − e) P₁(u), σ̇² = ±P₁(u)/4,
+          so σ̈ = P₁'(u) σ/4 (finite at the fold, where the first form is 0/0), and
+          q̈ = ε·scale·(f''(x) σ̇²/2 + f'(x) σ̈/√2), f'' = x f'³ (asin), −x f'³ (asinh), 0 (identity);
+        - steady: 0."""
+        mo, shape = self.motion, self.shape
+        if self.kind == "steady":
+            return np.zeros(np.shape(t))
+        if self.kind == "rotation":
+            sn, cn, _, _, _ = jac
+            return -self.S * shape.scale * float(mo.kappa) ** 2 * float(mo.m) * sn * cn
+        if self.kind == "libration through a fold":
+            sigma, sigma_dot = mo.signed_root(self.end, t, jac)
+            u = mo.u(t, jac)
+            sigma_ddot = np.polyval(self._p1_slope, u) * sigma / 4.0
+            x, _, df = self._fold_local(sigma, t, jac)
+            with np.errstate(all="ignore"):
+                ddf = {"asin": x * df**3, "asinh": -x * df**3}.get(shape.local, np.zeros_like(x))
+                return self.eps * shape.scale * (ddf * sigma_dot**2 / 2.0 + df * sigma_ddot / np.sqrt(2.0))
+        u = mo.u(t, jac)
+        p_slope = np.polyder([float(c) for c in mo.coefficients])
+        with np.errstate(all="ignore"):
+            return (np.polyval(p_slope, u) / 2.0 - self._d2g(q) * q_dot**2) / shape.dg(q)
+
+    @functools.cached_property
+    def _d2g(self) -> Any:
+        """g''(q) in doubles (NumPy), from the substitution's g by SymPy."""
+        import sympy as sp
+
+        g = self.found.u_of_q
+        qs = next(iter(g.free_symbols))
+        return sp.lambdify(qs, sp.diff(g, qs, 2), "numpy")  # a constant (u = q²) broadcasts as a scalar
+
+    @functools.cached_property
+    def _p1_slope(self) -> np.ndarray:
+        """P₁' in doubles, P(u) = (u − e) P₁(u) at the fold's end e (synthetic division at the working precision)."""
+        from ...solvers.quadrature_motion import DPS
+
+        mp = _mp()
+        with mp.workdps(DPS):
+            e = self.motion.interval[0 if self.end == "a" else 1]
+            quotient = [mp.mpf(0)]
+            for c in self.motion.coefficients[:-1]:
+                quotient.append(mp.mpf(c) + e * quotient[-1])
+            p1 = quotient[1:]
+            return np.polyder([float(c) for c in p1]) if len(p1) > 1 else np.zeros(1)
+
+    def _rate_slope(self, name: str, t: np.ndarray, jac: tuple, value: np.ndarray) -> np.ndarray:
+        """d/dτ of the cyclic rate ``name``, R = N(u)/D(u) (``value`` = R at τ, :meth:`_rate_values`):
+        Ṙ = u̇·(N'(u)/D(u) − R·D'(u)/D(u)), D'/D = rest'/rest + Σ 1/(u − p_j) with u − p_j from the nearer end of the
+        motion as in R itself (Kepler's dt/dφ = 1/(ℓu²) near the asymptote u → 0 keeps its digits)."""
+        num, lead, poles, rest = self.rate_poles(name)
+        mo = self.motion
+        u, u_dot = mo.u(t, jac), mo.u_dot(t, jac)
+        log_slope = np.polyval(np.polyder(rest), u) / np.polyval(rest, u) if len(rest) > 1 else np.zeros(u.shape)
+        distance = {}
+        for p in poles:
+            if p not in distance:
+                distance[p] = mo.minus(p, t, jac)
+            log_slope = log_slope + 1.0 / distance[p]
+        with np.errstate(all="ignore"):
+            plain = value * 0.0
+            if len(num) > 1:
+                den = lead * np.polyval(rest, u)
+                for p in poles:
+                    den = den * distance[p]
+                plain = np.polyval(np.polyder(num), u) / den
+            return u_dot * (plain - value * log_slope)
+
+    def columns(self, t: np.ndarray, wanted: Sequence[str], jac: tuple | None = None) -> dict:
+        """The requested state columns (q, q_dot of every coordinate) at the times ``t`` (``jac``: the motion's Jacobi
+        functions there, if the caller has them)."""
         t = np.asarray(t, dtype=float)
         escape = self.motion.escape_times
         if escape is not None and t.size and not (escape[0] < np.min(t) and np.max(t) < escape[1]):
@@ -463,7 +545,7 @@ class ClosedMotion:
             # turned), which is no motion — refused, as a blow-up is for integration
             raise OutOfReach(f"{self.remaining} reaches infinity at t = {escape[1]:.12g} (and, backwards, at "
                              f"{escape[0]:.12g}): u̇² = P(u) blows up in finite time, the closed form stops there")
-        jac = self.motion.jacobi(t)
+        jac = self.motion.jacobi(t) if jac is None else jac
         out: dict = {}
         r = self.remaining
         if r in wanted or r + "_dot" in wanted or any(c + "_dot" in wanted for c in self.cyclic):

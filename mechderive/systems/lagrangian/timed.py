@@ -18,12 +18,24 @@ approaching the ends of the orbit's domain geometrically (a pole of dt/ds: c →
 the cubic Hermite interpolant of the inverse s(t) on the cell (its slopes ds/dt = ċ at the nodes), so that Newton
 starts within ~1e-7 of the root and takes two or three steps.
 
+The outputs at the root (issue 16): s is a double, the root s* of t(s*) = t is not, and after many periods the half
+ulp of s, times a rate along c, is many ulp of an output (1000 Kepler orbits: φ ≈ 6300, r, ṙ, φ̇ ~1000 ulp off).  c
+is output as c(0) + s, its error that rounding; every other output X is moved to s* to first order,
+
+    X(s*) ≈ X(s) + X'(s)·(s* − s),  s* − s ≈ −ρ/(dt/ds),
+
+ρ = t(s) − t the residual the iteration left (formed without t's own rounding where the integral has a secular part,
+:meth:`~mechderive.solvers.quadrature_rational.RationalRate.minus`), X' in closed form (:meth:`TimedOrbit._slopes`:
+q' and c₂' are the orbit's columns, and q'', the rates' slopes, from u'' = P'(u)/2 and R'(u)·u').
+
 The error estimate is a bound at every sample, measured on the run (:meth:`TimedOrbit.error_bounds`).  At a sample
 the output differs from the exact motion at that t by (i) the doubles' error at the sample's own s = c − c(0), and
-(ii) the distance from s to the exact root s*, |s − s*| ≤ δs = (|ρ| + δt)/|dt/ds|, ρ = t(s) − t the residual the
-iteration left (formed without t's own rounding, :meth:`~mechderive.solvers.quadrature_rational.RationalRate.minus`,
-where the integral has a secular part) and δt the error of that residual.  Each output moves by |dX/ds|·δs for (ii)
-(dX/ds by central differences along s); (i) and δt come from a rounding model per sample, calibrated against 30
+(ii) what remains of the distance from s to the exact root s*, |s − s*| ≤ δs = (|ρ| + δt)/|dt/ds|, δt the error of the
+residual.  c moves by δs for (ii).  Every other output X was moved by the step −ρ/(dt/ds): its error from (ii) is
+|X'|·|step − (s* − s)| (the residual's error δt/|dt/ds|, the second-order term of t, ½|t''|δs²/|dt/ds|, and dt/ds's
+own relative error times the step) plus the first-order remainder ½|X''|δs² (X'' bounded by twice the larger mean of
+|X''| over a step each side, from the slopes' differences) plus the slope's own rounding times the step, modelled as
+the value's one order up.  (i) and δt come from a rounding model per sample, calibrated against 30
 digits on the run: an output X at fixed s (q, q̇, ċ, another cyclic coordinate and its rate) is within
 k·ε·(|X| + |dX/ds|/κ) of its exact value (the relative rounding of a few operations, and the rounding of the phase
 κs + v_s and of u, an error of ~ε/κ in s: modelled per output, not per factor, because q̇ = (dq/ds)/(dt/ds) takes both
@@ -32,7 +44,9 @@ k·its own first-order rounding bound (the sum of its terms' sizes and sensitivi
 :meth:`~mechderive.solvers.quadrature_rational.RationalRate.rounding`), k the larger of a floor (:data:`K_MODEL`,
 :data:`K_SUM`) and :data:`SAFETY` times the largest ratio of the measured error to the model at up to 8 samples (the
 last, five by the golden ratio, the slowest and the fastest in c), where every output is evaluated again at 30
-digits.  c = c(0) + s is exact in s but for half an ulp.
+digits.  c = c(0) + s is exact in s but for half an ulp.  With the step taken, the residual's error is the leading
+term of r, ṙ, φ̇ after many Kepler orbits: at e = 0.9 the periodic part of t(φ) has terms ~a^{3/2} and the residual
+is rounded to ~1e-14 there (ṙ within ~80 ulp, not a handful; the step removes only the known part of s* − s).
 """
 
 from __future__ import annotations
@@ -71,8 +85,10 @@ class TimedOrbit:
     ``period``, ``kind``), t being the independent variable again."""
 
     estimate_kind = ("absolute, in the outputs' units, a bound at every sample: the doubles' error at the sample's c "
-                     "from a rounding model calibrated against 30 digits at up to 8 of the times, plus the output's rate "
-                     "along c times |c − c*| ≤ (|t(c) − t| + the residual's error)·|dc/dt|")
+                     "from a rounding model calibrated against 30 digits at up to 8 of the times, plus, for c, "
+                     "|c − c*| ≤ (|t(c) − t| + the residual's error)·|dc/dt|; the other outputs are moved to c* to "
+                     "first order, and bounded by their rate along c times the residual's error·|dc/dt| and the "
+                     "second-order remainder")
     #: the estimate bounds every sample (the run's report needs no floor of a column's rounding)
     bounds_every_sample = True
 
@@ -288,9 +304,14 @@ class TimedOrbit:
         r = self.remaining
         return [r, r + "_dot", *self.others, *(c + "_dot" for c in self.others), "t_dot"]
 
-    def _state(self, s: np.ndarray, orbit_cols: dict | None = None) -> dict:
-        """Every column in t at the orbit's s (see the module docstring)."""
-        cols = orbit_cols if orbit_cols is not None else self.orbit.columns(s, self._orbit_names())
+    def _orbit_at(self, s: np.ndarray) -> tuple[dict, tuple]:
+        """(the orbit's columns at s, the Jacobi functions there): one evaluation of the Jacobi functions serves the
+        columns and their slopes."""
+        jac = self.motion.jacobi(s)
+        return self.orbit.columns(s, self._orbit_names(), jac=jac), jac
+
+    def _state(self, s: np.ndarray, cols: dict) -> dict:
+        """Every column in t at the orbit's s, before the correction to s* (see the module docstring)."""
         with np.errstate(all="ignore"):
             rate = 1.0 / cols["t_dot"]
         r, c = self.remaining, self.along
@@ -299,10 +320,45 @@ class TimedOrbit:
             out[other], out[other + "_dot"] = cols[other], cols[other + "_dot"] * rate
         return out
 
+    def _slopes(self, s: np.ndarray, cols: dict, jac: tuple) -> dict:
+        """{name: d/ds} of every state column but c (whose own is 1), and of dt/ds (``t_dot``: d²t/ds²), in closed
+        form at the orbit's s: q' = dq/ds and c₂' = dc₂/ds are the orbit's columns; with T = dt/ds, ċ = 1/T and
+        ċ' = −T'ċ²; q̇ = q'ċ gives q̇' = q''ċ + q'ċ', ċ₂ = c₂'ċ gives ċ₂' = c₂''ċ + c₂'ċ' (q'' and the rates' slopes
+        T', c₂'' from :meth:`~.closed.ClosedMotion._q_ddot` and :meth:`~.closed.ClosedMotion._rate_slope`)."""
+        orbit, r, c = self.orbit, self.remaining, self.along
+        zero = np.zeros(s.shape)
+        with np.errstate(all="ignore"):
+            rate = 1.0 / cols["t_dot"]
+            # u constant on a steady orbit: every rate along s is 0 but the cyclic coordinates' own
+            t_curve = zero if self.steady else orbit._rate_slope("t", s, jac, cols["t_dot"])
+            q_curve = orbit._q_ddot(s, jac, cols[r], cols[r + "_dot"])
+            rate_slope = -t_curve * rate * rate
+            out = {r: cols[r + "_dot"], r + "_dot": q_curve * rate + cols[r + "_dot"] * rate_slope,
+                   c + "_dot": rate_slope, "t_dot": t_curve}
+            for other in self.others:
+                along = cols[other + "_dot"]
+                curve = zero if self.steady else orbit._rate_slope(other, s, jac, along)
+                out[other], out[other + "_dot"] = along, curve * rate + along * rate_slope
+        return out
+
+    def _step(self, residual: np.ndarray, cols: dict) -> np.ndarray:
+        """s* − s to first order, −ρ/(dt/ds): the distance from the double s to the exact root of t(s) = t."""
+        with np.errstate(all="ignore"):
+            return -residual / cols["t_dot"]
+
     def columns(self, t: np.ndarray, wanted: Sequence[str]) -> dict:
-        """The state columns (each q and q̇) at the times t: every one is computed (the inverse gives them all)."""
-        s, _ = self.inverse(np.asarray(t, dtype=float))
-        return self._state(s)
+        """The state columns (each q and q̇) at the times t: every one is computed (the inverse gives them all).  c is
+        c(0) + s, the double s the inversion found; every other column X is moved from s to the exact root s* to first
+        order, X(s) + (dX/ds)·(s* − s) with s* − s = −ρ/(dt/ds) from the residual ρ (issue 16: after 1000 Kepler
+        orbits r, ṙ, φ̇ at s were ~1000 ulp off, the half ulp of s ≈ 6000 times their rate along φ)."""
+        s, residual = self.inverse(np.asarray(t, dtype=float))
+        cols, jac = self._orbit_at(s)
+        out = self._state(s, cols)
+        step = self._step(residual, cols)
+        for name, slope in self._slopes(s, cols, jac).items():
+            if name in out:
+                out[name] = out[name] + slope * step
+        return out
 
     # --- the estimate, the self-check ------------------------------------------------------------------
 
@@ -346,22 +402,14 @@ class TimedOrbit:
         s, residual = self.inverse(t)
         r, c = self.remaining, self.along
         names = self._orbit_names()
-        cols = self.orbit.columns(s, names)
+        cols, jac = self._orbit_at(s)
+        # the outputs at the double s (the rounding model's and the calibration's subject), and each one's rate along
+        # s in closed form (c's is 1), with which :meth:`columns` moved it to s*
         here = self._state(s, cols)
+        slope = self._slopes(s, cols, jac)
+        step = self._step(residual, cols)
         length = self._length()
-        # each output's rate along s: q's and the other cyclic coordinates' from the closed form, c's = 1, the rates'
-        # by central differences over the steps actually taken ((s ± h) − s is exact)
         outputs = [n for n in self._state_names() if n != c]
-        if self.steady:
-            slope = {n: np.zeros(s.shape) for n in outputs}
-        else:
-            h = self._steps(s, length)
-            up, down = s + h, s - h
-            plus, minus = self._state(up), self._state(down)
-            width = (up - s) + (s - down)
-            slope = {n: (plus[n] - minus[n]) / width for n in outputs}
-        for q in (r, *self.others):
-            slope[q] = cols[q + "_dot"]
         rate_abs = np.abs(cols["t_dot"])
 
         # the rounding model at fixed s, per output (in its units): generic ε(|X| + |dX/ds|·L [+ an integral's terms'
@@ -418,13 +466,41 @@ class TimedOrbit:
             t_error = np.abs(t) * (relative + eps)
         else:
             t_error = max(t_floor, SAFETY * factors.get("t", 0.0)) * t_model
-        # --- the distance to the exact root, and each output's bound --------------------------------------------
+        # --- the distance to the exact root, the correction's error, and each output's bound ------------------------
         with np.errstate(all="ignore"):
             delta_s = (np.abs(residual) + t_error) / rate_abs
+            # sup |X''| over [s − δs, s + δs], the Taylor remainder's: twice the larger mean of |X''| over a step each
+            # side (the slopes' differences), the step at least δs (X'' varies far less than 2× over it: at most 2⁻⁸
+            # of the distance to a pole of dt/ds, 2⁻¹⁶ of the orbit's scale); t'' = T' from its own slopes likewise
+            curve = {n: np.zeros(s.shape) for n in [*outputs, "t_dot"]}
+            if not self.steady:
+                h = np.maximum(self._steps(s, length), delta_s)
+                up, down = s + h, s - h
+                plus, minus = self._slopes(up, *self._orbit_at(up)), self._slopes(down, *self._orbit_at(down))
+                for n in outputs:
+                    curve[n] = 2 * np.maximum(np.abs(plus[n] - slope[n]) / (up - s),
+                                              np.abs(slope[n] - minus[n]) / (s - down))
+                curve["t_dot"] = 2 * np.maximum.reduce([np.abs(slope["t_dot"]), np.abs(plus["t_dot"]),
+                                                        np.abs(minus["t_dot"])])
+            # |step − (s* − s)|: 0 = t(s*) − t = ρ + T·(s* − s) + ½t''(ξ)(s* − s)², the step −ρ̂/T̂ taken from the
+            # residual as formed (its error t_error) and T = dt/ds at s (its relative error ċ's at fixed s, ċ = 1/T;
+            # the division's rounding ε)
+            scale_rate, floor_rate = model(c + "_dot")
+            k_rate = max(floor_rate, SAFETY * factors.get(c + "_dot", 0.0))
+            relative_rate = k_rate * scale_rate / np.abs(here[c + "_dot"])
+            step_error = (t_error + 0.5 * curve["t_dot"] * delta_s**2) / rate_abs + (relative_rate + eps) * np.abs(step)
             out = {c: 0.5 * np.spacing(np.abs(here[c])) + delta_s}
             for name in outputs:
                 scale, floor = model(name)
-                out[name] = max(floor, SAFETY * factors.get(name, 0.0)) * scale + np.abs(slope[name]) * delta_s
+                k = max(floor, SAFETY * factors.get(name, 0.0))
+                out[name] = (k * scale                                    # X at the double s
+                             + np.abs(slope[name]) * step_error           # the step's own error, first order
+                             + 0.5 * curve[name] * delta_s**2             # the remainder of the first-order Taylor step
+                             # the slope's rounding, modelled as its value's one order up (X' for X, X''·L for X'L):
+                             # it enters times |step| ≤ δs, ~ulp(s) of the model's term
+                             + k * eps * (np.abs(slope[name]) + curve[name] * length) * np.abs(step)
+                             # the product's and the sum's rounding
+                             + eps * (np.abs(here[name]) + np.abs(slope[name] * step)))
         for name, values in out.items():
             if not np.all(np.isfinite(values)):
                 i = int(np.argmax(~np.isfinite(values)))
