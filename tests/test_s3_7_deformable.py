@@ -376,7 +376,7 @@ def test_3_102_small_loop_remainder_is_third_order(conn):
     F = conn.field_strength(X0)
     order = np.polyfit(np.log(sizes), np.log(_small_loop_errors(conn, F[0, 1], sizes)), 1)[0]
     assert abs(order - 3) < 0.15, order
-    d, O = conn.connection_derivatives(X0), conn.connection(X0)
+    d = conn.connection_derivatives(X0)
     printed = -(d[1, 0] - d[0, 1]) + (F[0, 1] - (d[1, 0] - d[0, 1]))  # (3.103) as printed: derivatives swapped
     order_printed = np.polyfit(np.log(sizes), np.log(_small_loop_errors(conn, printed, sizes)), 1)[0]
     assert abs(order_printed - 2) < 0.15, order_printed
