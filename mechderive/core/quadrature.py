@@ -34,6 +34,8 @@ from dataclasses import dataclass
 from typing import Callable
 
 import sympy as sp
+from sympy.functions.elementary.hyperbolic import HyperbolicFunction
+from sympy.functions.elementary.trigonometric import TrigonometricFunction
 
 from ..errors import DerivationError
 from .lagrangian import LagrangianModel
@@ -154,7 +156,20 @@ def _as_polynomial(expr: sp.Expr, u: sp.Symbol) -> sp.Poly | None:
         # faster normal forms could not remove (cos u under u = q stays cos u whatever simplify does)
         return None if transcendental(e) else sp.cancel(sp.simplify(e))
 
-    for form in (lambda e: sp.cancel(sp.together(e)), lambda e: sp.cancel(trig_normal(e)), slow):
+    forms = [lambda e: sp.cancel(sp.together(e))]
+    # The first form is cancel's reduced fraction p/q in the expression's generators (u, the other symbols, atoms
+    # such as acos u or √u).  The later forms are tried only where they could decide otherwise (with floats, whose
+    # inexact gcd makes no reduced fraction unique, all are tried):
+    exact = not expr.has(sp.Float)
+    if not (exact and not expr.atoms(TrigonometricFunction, HyperbolicFunction)):
+        # trig_normal rewrites sines and cosines only (expand_trig: the trigonometric and hyperbolic functions);
+        # without any, it reduces the same rational function in the same generators to the same fraction
+        forms.append(lambda e: sp.cancel(trig_normal(e)))
+    if not (exact and expr.is_rational_function(*expr.free_symbols)):
+        # a rational function of symbols whose reduced denominator has u is no polynomial in u, whatever
+        # simplify writes it as (Kepler's u̇² = (2E m u² + 2 k m u − p²)/(m² u²) under u = q)
+        forms.append(slow)
+    for form in forms:
         try:
             e = form(expr)
         except (TypeError, ValueError, NotImplementedError, RecursionError, sp.PolynomialError):

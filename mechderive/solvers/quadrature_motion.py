@@ -71,6 +71,7 @@ included — integrates by partial fractions in that variable (:mod:`mechderive.
 from __future__ import annotations
 
 import dataclasses
+import functools
 from dataclasses import dataclass, field
 from typing import Any, Sequence
 
@@ -774,7 +775,15 @@ def _pi_mp(n, phi, m) -> Any:
     mp = _mp()
     j = mp.nint(phi / mp.pi)
     rest = phi - mp.pi * j
-    return (2 * j * mp.ellippi(n, m) if j else 0) + mp.ellippi(n, rest, m)
+    return (2 * j * _complete_pi_mp(n, m, mp.mp.prec) if j else 0) + mp.ellippi(n, rest, m)
+
+
+@functools.lru_cache(maxsize=64)
+def _complete_pi_mp(n, m, prec: int) -> Any:
+    """mpmath's Π(n|m) at the caller's working precision ``prec`` (bits: part of the key, as the value depends on
+    it).  An estimate asks for the same few at each of its times past the first half-period, and each costs as
+    much as the incomplete integral."""
+    return _mp().ellippi(n, m)
 
 
 def rate_integral(motion: EllipticMotion, numerator: Sequence, denominator: Sequence) -> RateIntegral:
