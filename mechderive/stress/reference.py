@@ -11,13 +11,15 @@ as in ``tests/reference/make_*_reference.py``: the body angular velocity ω and 
 
 Method.  Both right-hand sides are quadratic polynomials in y = (ω, R), so the Taylor coefficients
 of y(t0 + s) = Σ c_k s^k follow exactly from c_{k+1} = F_k / (k + 1), F_k the k-th coefficient of
-the right-hand side, each product's coefficient a Cauchy product Σ_i a_i b_{k-i} (``mpmath.fdot``).
+the right-hand side, each product's coefficient a Cauchy product Σ_i a_i b_{k-i}, summed exactly over
+integers in fixed point (:meth:`QuadraticField.fixed_series`; ``mpmath.fdot`` in :meth:`QuadraticField.series_mp`).
 The order N = ⌈-ln(tol)/2⌉ + 1 and the step h = ρ/e² with ρ estimated from the last two coefficients
 (Jorba & Zou 2005, Exp. Math. 14, 99): the truncation error is then ~e^{-2N} ≤ tol per step.  This
 is mpmath.odefun's method (a Taylor series) with the coefficients computed exactly instead of by
 finite differences at N-fold precision, which makes it ~30× faster; the test suite checks the two
 agree to 1e-24.  Each step's polynomial is kept, so the solution can be evaluated anywhere (dense
-output, e.g. at the exact binary value of a float time t, or inside a root search for a period).
+output, e.g. at the exact binary value of a float time t, or inside a root search for a period), by
+Horner's rule in integers (:class:`StepPolynomial`).
 
 Long times use exact symmetries instead of integrating (see :func:`monodromy_power`).
 """
