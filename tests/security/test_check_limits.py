@@ -222,6 +222,33 @@ def test_nested_scopes_and_restoration():
     assert run_until(lambda: _spin(1), time.monotonic() - 1, unbudgeted_ok=True) == (False, None)  # already late
 
 
+def test_an_alarm_on_the_way_out_still_restores_everything(monkeypatch):
+    """An alarm handled as a scope ends but before SIGALRM is held back (a reminder 0.1 s after an expired scope, the
+    process descheduled that long) must not leave the scope armed: a stale expired scope ended every later one and
+    its reminder fired outside, during a test worker's failure report.  Simulated: the exit's bookkeeping is
+    interrupted once, as by that alarm."""
+    from contextlib import contextmanager
+
+    from mechderive.formulas import budget
+
+    real, entries = budget._bookkeeping, []
+
+    @contextmanager
+    def interrupted_once():
+        entries.append(len(budget._scopes))
+        if len(entries) == 2:  # the scope's exit (the first entry armed it)
+            raise budget.OutOfTime(budget._scopes[-1])
+        with real():
+            yield
+
+    monkeypatch.setattr(budget, "_bookkeeping", interrupted_once)
+    before = signal.getsignal(signal.SIGALRM), sys.unraisablehook
+    assert run_until(lambda: "done", time.monotonic() + 5, unbudgeted_ok=True) == (True, "done")
+    assert len(entries) == 3  # interrupted, then done again
+    assert budget._scopes == [] and (signal.getsignal(signal.SIGALRM), sys.unraisablehook) == before
+    assert signal.getitimer(signal.ITIMER_REAL) == (0.0, 0.0)
+
+
 def test_an_alarm_another_thread_took_is_not_waited_for(monkeypatch):
     """The outermost scope's end takes a SIGALRM still pending.  One that ``sigpending`` showed may be
     taken by another thread before it is waited for (xdist's and Dask's threads do not block it): a
