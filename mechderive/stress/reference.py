@@ -98,9 +98,7 @@ class QuadraticField:
         nonzero = [abs(y) for y in y0 if y]
         if not nonzero:
             return None
-        top = int(mpmath.floor(mpmath.log(max(nonzero), 2))) + 1  # |y| < 2^top
-        spread = top - int(mpmath.floor(mpmath.log(min(nonzero), 2)))
-        P = mpmath.mp.prec + 64 + 2 * spread
+        top, spread, P = _fixed_point_scale(nonzero)
         if P > _MAX_FIXED_BITS:
             return None
         if step is None:
@@ -169,6 +167,15 @@ class QuadraticField:
 _MAX_FIXED_BITS = 20_000
 
 
+def _fixed_point_scale(magnitudes: Sequence[mpmath.mpf]) -> tuple[int, int, int]:
+    """(top, spread, P) for a state of these nonzero magnitudes: |y| < 2^top, the largest over the smallest below
+    2^spread, and P = precision + 64 + 2·spread bits of fixed point in units of 2^top (each component keeps its
+    relative accuracy, products of two included)."""
+    top = int(mpmath.floor(mpmath.log(max(magnitudes), 2))) + 1
+    spread = top - int(mpmath.floor(mpmath.log(min(magnitudes), 2)))
+    return top, spread, mpmath.mp.prec + 64 + 2 * spread
+
+
 def _fixed(x: mpmath.mpf, P: int) -> int:
     """round(x·2^P), exactly from x's mantissa."""
     sign, man, exp, _ = mpf(x)._mpf_
@@ -215,9 +222,7 @@ class StepPolynomial:
     @classmethod
     def from_coefficients(cls, c: Sequence[Sequence[mpmath.mpf]], h: mpmath.mpf) -> "StepPolynomial":
         """From mpf coefficients c_ik (the :meth:`QuadraticField.series_mp` route)."""
-        values = [abs(v) for ci in c for v in ci[:1] if v] or [mpf(1)]
-        top = int(mpmath.floor(mpmath.log(max(values), 2))) + 1
-        P = mpmath.mp.prec + 64 + 2 * (top - int(mpmath.floor(mpmath.log(min(values), 2))))
+        top, _, P = _fixed_point_scale([abs(v) for ci in c for v in ci[:1] if v] or [mpf(1)])
         hk = [mpmath.ldexp(h ** k, -top) for k in range(len(c[0]))]
         return cls([[_fixed(v * w, P) for v, w in zip(ci, hk)] for ci in c], h, top, P)
 
