@@ -221,7 +221,7 @@ class ClosedMotion:
         import sympy as sp
 
         mp = _mp()
-        value = sp.N(expr.subs(self.values), mp.mp.dps + 10) if hasattr(expr, "subs") else expr
+        value = sp.N(expr.xreplace(self.values), mp.mp.dps + 10) if hasattr(expr, "subs") else expr
         return mp.mpf(str(sp.re(value))) if not isinstance(value, (int, float)) else mp.mpf(value)
 
     def _constants(self, model: Any, parameters: dict, initial: dict) -> dict:
@@ -240,10 +240,10 @@ class ClosedMotion:
             symbols |= {model.momentum_symbols[q]}
         for sym in symbols:
             if sym.name == "E":
-                values[sym] = sp.N(model.energy_function.subs(state).subs(self._par(parameters)), 75)
+                values[sym] = sp.N(model.energy_function.xreplace(state).xreplace(self._par(parameters)), 75)
         for q in model.cyclic_coordinates:
-            values[model.momentum_symbols[q]] = sp.N(model.conserved_momenta[q].subs(state)
-                                                     .subs(self._par(parameters)), 75)
+            values[model.momentum_symbols[q]] = sp.N(model.conserved_momenta[q].xreplace(state)
+                                                     .xreplace(self._par(parameters)), 75)
         values.update(self._par(parameters))
         return values
 
