@@ -246,13 +246,20 @@ class HeavyTopModel(LagrangianModel):
         return M * sp.factor(gravity).subs(u, sp.cos(theta)) + _theta_form(v - M * gravity)
 
     @derived
-    def reduced_energy(self) -> sp.Expr:
-        """E' (3.69) in θ, θ̇, a, b: the Routhian's energy Σ θ̇ ∂R/∂θ̇ − R (which is E) less ½ I3 ω3²."""
+    def reduced_energy_terms(self) -> tuple[sp.Expr, sp.Expr]:
+        """(c, W(θ)) with E' = c θ̇² + W(θ) (3.69): the Routhian's energy Σ θ̇ ∂R/∂θ̇ − R (which is E) less
+        ½ I3 ω3², in θ, a, b, expanded as it comes (not tidied: f(u) takes them, and brings W to u itself)."""
         R = self.routhian
         h = sp.expand((theta_dot * R.diff(theta_dot) - R - self.spin_energy).subs(self.momenta_in_ab))
         mass, rest = h.coeff(theta_dot, 2), h.coeff(theta_dot, 0)
         if sp.expand(h - mass * theta_dot**2 - rest) != 0 or mass.has(theta):
             raise DerivationError(f"expected E' = c θ̇² + W(θ) with constant c, got {h}")
+        return mass, rest
+
+    @derived
+    def reduced_energy(self) -> sp.Expr:
+        """E' (3.69) in θ, θ̇, a, b, readable: ½ I1 θ̇² + the gravity term + the rest over sin²θ."""
+        mass, rest = self.reduced_energy_terms
         gravity = sp.expand(_in_u(rest)).coeff(M)
         return sp.factor(mass) * theta_dot**2 + M * sp.factor(gravity).subs(u, sp.cos(theta)) + \
             _theta_form(rest - M * gravity.subs(u, sp.cos(theta)))
@@ -268,12 +275,11 @@ class HeavyTopModel(LagrangianModel):
     def f_u(self) -> sp.Expr:
         """f(u) of (3.73): u̇² with θ̇² from E' = ½I1θ̇² + V_eff, E' = I1α/2, Mgl = I1β/2, cos θ = u.
 
-        A polynomial in u (checked) with coefficients in a, b, α, β.
+        A polynomial in u (checked) with coefficients in a, b, α, β.  From E' as the Routhian gives it, not
+        from the readable :attr:`reduced_energy` (tidying W(θ) only to bring it to u again here was ~15% of
+        the derivations of a cold ``run``): f is brought to its own form below, whatever W's form.
         """
-        E = self.reduced_energy
-        mass, rest = E.coeff(theta_dot, 2), E.subs(theta_dot, 0)
-        if sp.expand(E - mass * theta_dot**2 - rest) != 0:
-            raise DerivationError(f"expected E' = c θ̇² + W(θ), got {E}")
+        mass, rest = self.reduced_energy_terms
         rate_squared = (E_prime - rest) / mass  # θ̇² from (3.69)
         (M_of_beta,), = sp.linsolve([beta - 2 * M * g * l / I1], [M])  # (3.72) for M: linear
         f = self.u_dot_squared.subs(theta_dot**2, rate_squared).subs({E_prime: I1 * alpha / 2, M: M_of_beta})
