@@ -216,6 +216,10 @@ class HeavyTopModel(LagrangianModel):
             raise DerivationError(f"expected one solution for (p_φ, p_ψ) in a, b, got {sol}")
         return {pf: sol[0][0], ps: sol[0][1]}
 
+    def _rate_in_u(self, name: str) -> sp.Expr:
+        """The cyclic velocity ``name`` solved from the conserved momenta, in a, b and u = cos θ: one fraction."""
+        return _in_u(self.cyclic_velocities[state_symbol(name)].subs(self.momenta_in_ab))
+
     def _rate(self, name: str) -> sp.Expr:
         return _theta_form(self.cyclic_velocities[state_symbol(name)].subs(self.momenta_in_ab))
 
@@ -297,13 +301,14 @@ class HeavyTopModel(LagrangianModel):
 
     @derived
     def precession_rate_u(self) -> sp.Expr:
-        """φ̇(u) of (3.74): (3.67) at cos θ = u."""
-        return _over_one_minus_u2(_in_u(self.precession_rate_theta))
+        """φ̇(u) of (3.74): (3.67) at cos θ = u — from the solved velocity itself, not from the readable (3.67)
+        brought back to u (:func:`_in_u` gives the same factored fraction of either: half the time)."""
+        return _over_one_minus_u2(self._rate_in_u("phi_dot"))
 
     @derived
     def spin_rate_u(self) -> sp.Expr:
-        """ψ̇(u) of (3.75): (3.68) at cos θ = u."""
-        return _over_one_minus_u2(_in_u(self.spin_rate_theta))
+        """ψ̇(u) of (3.75): (3.68) at cos θ = u, like :attr:`precession_rate_u`."""
+        return _over_one_minus_u2(self._rate_in_u("psi_dot"))
 
     @derived
     def rates_near_poles(self) -> tuple[sp.Expr, sp.Expr]:
