@@ -56,6 +56,15 @@ def test_f_u_derives_nothing_of_the_equations_of_motion():
     assert "routhian" in m.derived and "kinetic_energy" in m.derived
 
 
+def test_f_u_and_rates_in_u_skip_the_readable_theta_forms():
+    # f(u) and φ̇(u), ψ̇(u) are taken from what the Routhian and the momenta give, not from the readable E' (3.69)
+    # and (3.67)-(3.68) brought back to u (a cold run's time): the readable forms are derived only when asked for
+    m = HeavyTopModel()
+    _ = m.f_u, m.precession_rate_u, m.spin_rate_u
+    for name in ("reduced_energy", "precession_rate_theta", "spin_rate_theta"):
+        assert not m.is_derived(name), name
+
+
 def test_accelerations_derive_nothing_of_the_reduction():
     m = HeavyTopModel()
     _ = m.accelerations

@@ -216,6 +216,10 @@ class HeavyTopModel(LagrangianModel):
             raise DerivationError(f"expected one solution for (p_φ, p_ψ) in a, b, got {sol}")
         return {pf: sol[0][0], ps: sol[0][1]}
 
+    def _rate_in_u(self, name: str) -> sp.Expr:
+        """The cyclic velocity ``name`` solved from the conserved momenta, in a, b and u = cos θ: one fraction."""
+        return _in_u(self.cyclic_velocities[state_symbol(name)].subs(self.momenta_in_ab))
+
     def _rate(self, name: str) -> sp.Expr:
         return _theta_form(self.cyclic_velocities[state_symbol(name)].subs(self.momenta_in_ab))
 
@@ -246,13 +250,20 @@ class HeavyTopModel(LagrangianModel):
         return M * sp.factor(gravity).subs(u, sp.cos(theta)) + _theta_form(v - M * gravity)
 
     @derived
-    def reduced_energy(self) -> sp.Expr:
-        """E' (3.69) in θ, θ̇, a, b: the Routhian's energy Σ θ̇ ∂R/∂θ̇ − R (which is E) less ½ I3 ω3²."""
+    def reduced_energy_terms(self) -> tuple[sp.Expr, sp.Expr]:
+        """(c, W(θ)) with E' = c θ̇² + W(θ) (3.69): the Routhian's energy Σ θ̇ ∂R/∂θ̇ − R (which is E) less
+        ½ I3 ω3², in θ, a, b, expanded as it comes (not tidied: f(u) takes them, and brings W to u itself)."""
         R = self.routhian
         h = sp.expand((theta_dot * R.diff(theta_dot) - R - self.spin_energy).subs(self.momenta_in_ab))
         mass, rest = h.coeff(theta_dot, 2), h.coeff(theta_dot, 0)
         if sp.expand(h - mass * theta_dot**2 - rest) != 0 or mass.has(theta):
             raise DerivationError(f"expected E' = c θ̇² + W(θ) with constant c, got {h}")
+        return mass, rest
+
+    @derived
+    def reduced_energy(self) -> sp.Expr:
+        """E' (3.69) in θ, θ̇, a, b, readable: ½ I1 θ̇² + the gravity term + the rest over sin²θ."""
+        mass, rest = self.reduced_energy_terms
         gravity = sp.expand(_in_u(rest)).coeff(M)
         return sp.factor(mass) * theta_dot**2 + M * sp.factor(gravity).subs(u, sp.cos(theta)) + \
             _theta_form(rest - M * gravity.subs(u, sp.cos(theta)))
@@ -268,12 +279,11 @@ class HeavyTopModel(LagrangianModel):
     def f_u(self) -> sp.Expr:
         """f(u) of (3.73): u̇² with θ̇² from E' = ½I1θ̇² + V_eff, E' = I1α/2, Mgl = I1β/2, cos θ = u.
 
-        A polynomial in u (checked) with coefficients in a, b, α, β.
+        A polynomial in u (checked) with coefficients in a, b, α, β.  From E' as the Routhian gives it, not
+        from the readable :attr:`reduced_energy` (tidying W(θ) only to bring it to u again here was ~15% of
+        the derivations of a cold ``run``): f is brought to its own form below, whatever W's form.
         """
-        E = self.reduced_energy
-        mass, rest = E.coeff(theta_dot, 2), E.subs(theta_dot, 0)
-        if sp.expand(E - mass * theta_dot**2 - rest) != 0:
-            raise DerivationError(f"expected E' = c θ̇² + W(θ), got {E}")
+        mass, rest = self.reduced_energy_terms
         rate_squared = (E_prime - rest) / mass  # θ̇² from (3.69)
         (M_of_beta,), = sp.linsolve([beta - 2 * M * g * l / I1], [M])  # (3.72) for M: linear
         f = self.u_dot_squared.subs(theta_dot**2, rate_squared).subs({E_prime: I1 * alpha / 2, M: M_of_beta})
@@ -291,13 +301,14 @@ class HeavyTopModel(LagrangianModel):
 
     @derived
     def precession_rate_u(self) -> sp.Expr:
-        """φ̇(u) of (3.74): (3.67) at cos θ = u."""
-        return _over_one_minus_u2(_in_u(self.precession_rate_theta))
+        """φ̇(u) of (3.74): (3.67) at cos θ = u — from the solved velocity itself, not from the readable (3.67)
+        brought back to u (:func:`_in_u` gives the same factored fraction of either: half the time)."""
+        return _over_one_minus_u2(self._rate_in_u("phi_dot"))
 
     @derived
     def spin_rate_u(self) -> sp.Expr:
-        """ψ̇(u) of (3.75): (3.68) at cos θ = u."""
-        return _over_one_minus_u2(_in_u(self.spin_rate_theta))
+        """ψ̇(u) of (3.75): (3.68) at cos θ = u, like :attr:`precession_rate_u`."""
+        return _over_one_minus_u2(self._rate_in_u("psi_dot"))
 
     @derived
     def rates_near_poles(self) -> tuple[sp.Expr, sp.Expr]:
