@@ -78,9 +78,17 @@ def _readable(expr: sp.Expr, collect: tuple = (I1, I3)) -> sp.Expr:
     parts = sp.collect(sp.expand(expr), list(collect), evaluate=False)
     out = sp.Integer(0)
     for key, coeff in parts.items():
-        alt = sp.factor(sp.expand(coeff.replace(sp.sin, lambda x: sp.sqrt(1 - sp.cos(x) ** 2))))
-        out += key * (alt if sp.count_ops(alt) < sp.count_ops(coeff) else coeff)
+        out += key * _shorter_form(coeff)
     return out
+
+
+@functools.lru_cache(maxsize=64)
+def _shorter_form(coeff: sp.Expr) -> sp.Expr:
+    """``coeff`` or its factored form in cos θ (sin² as 1 − cos²), the shorter: for :func:`_readable`, which
+    meets the same coefficients again (T's in E, E's I1 part in E'), each factored once (a third of the
+    factorisations before the fork of a cold start were repeats)."""
+    alt = sp.factor(sp.expand(coeff.replace(sp.sin, lambda x: sp.sqrt(1 - sp.cos(x) ** 2))))
+    return alt if sp.count_ops(alt) < sp.count_ops(coeff) else coeff
 
 
 def _in_u(expr: sp.Expr) -> sp.Expr:
