@@ -312,15 +312,21 @@ class LagrangianModel(SymbolicModel):
         return {v: _normal(x) for v, x in zip(unknowns, sol)}
 
     @derived
-    def routhian(self) -> sp.Expr:
-        """R = L − Σ_c p_c q̇_c with the cyclic velocities eliminated: a Lagrangian of the rest, p_c as parameters."""
+    def routhian_normal(self) -> sp.Expr:
+        """The Routhian :attr:`routhian` in the trig normal form: one fraction, as it comes (not collected by
+        powers of the velocities — for derivations that go on from its value, not for reading)."""
         p = self.momentum_symbols
         R = self.state_lagrangian - sum(p[q] * self.velocities[self._index(q)] for q in self.cyclic_coordinates)
         # the keys are the velocity symbols themselves: replacing those nodes (xreplace) is the substitution
         R = trig_normal(R.xreplace(self.cyclic_velocities))
         if R.has(*self.cyclic_velocities) or any(R.has(self.positions[self._index(q)]) for q in self.cyclic_coordinates):
             raise DerivationError(f"expected the Routhian free of the cyclic coordinates and velocities, got {R}")
-        return _collect_velocities(R, self._remaining_velocities())
+        return R
+
+    @derived
+    def routhian(self) -> sp.Expr:
+        """R = L − Σ_c p_c q̇_c with the cyclic velocities eliminated: a Lagrangian of the rest, p_c as parameters."""
+        return _collect_velocities(self.routhian_normal, self._remaining_velocities())
 
     def _remaining_velocities(self) -> list[sp.Symbol]:
         return [self.velocities[self._index(q)] for q in self.remaining_coordinates]

@@ -260,8 +260,10 @@ class HeavyTopModel(LagrangianModel):
     @derived
     def reduced_energy_terms(self) -> tuple[sp.Expr, sp.Expr]:
         """(c, W(θ)) with E' = c θ̇² + W(θ) (3.69): the Routhian's energy Σ θ̇ ∂R/∂θ̇ − R (which is E) less
-        ½ I3 ω3², in θ, a, b, expanded as it comes (not tidied: f(u) takes them, and brings W to u itself)."""
-        R = self.routhian
+        ½ I3 ω3², in θ, a, b, expanded as it comes (not tidied: f(u) takes them, and brings W to u itself) — from
+        the Routhian's normal form, not its readable :attr:`routhian` (collecting and factoring it by powers of θ̇
+        was a third of the Routhian's time on a cold start's critical path, for a form expanded again here)."""
+        R = self.routhian_normal
         h = sp.expand((theta_dot * R.diff(theta_dot) - R - self.spin_energy).subs(self.momenta_in_ab))
         mass, rest = h.coeff(theta_dot, 2), h.coeff(theta_dot, 0)
         if sp.expand(h - mass * theta_dot**2 - rest) != 0 or mass.has(theta):
