@@ -228,6 +228,8 @@ def _shared_prefix() -> None:
 
     m = hm.model()
     _ = m.cyclic_velocities, m.momenta_in_ab, m.constants_from_state
+    # both processes compile next, and lambdify's code printer imports this module on first use (~11 ms)
+    import sympy.codegen.ast  # noqa: F401
 
 
 def _exact(scene: "Scene", t: np.ndarray) -> Solved:
