@@ -42,7 +42,7 @@ The spherical pendulum (θ from the downward vertical):
 >>> pendulum.effective_potential
 -g*l*m*cos(theta) + p_phi**2/(2*l**2*m*sin(theta)**2)
 >>> pendulum.derived
-['lagrangian', 'state_lagrangian', 'generalised_forces', 'cyclic_coordinates', 'momentum_symbols', 'momenta', 'cyclic_velocities', 'routhian', 'effective_potential']
+['lagrangian', 'state_lagrangian', 'generalised_forces', 'cyclic_coordinates', 'momentum_symbols', 'momenta', 'cyclic_velocities', 'routhian_normal', 'routhian', 'effective_potential']
 """
 
 from __future__ import annotations
