@@ -247,6 +247,17 @@ def _skip_final_collection() -> None:
     gc.freeze()
 
 
+def _collect_less() -> None:
+    """Run the cyclic garbage collector less often (a young generation of 10,000 objects instead of 700): a
+    cold start's derivations allocate SymPy expressions by the hundred thousand, nearly all alive to the end
+    or freed by reference counting, and the collector's passes over them took 0.11-0.16 s of a one-process
+    cold ``run`` (0.07-0.10 s so).  Only for the console script's own process, never for a program that
+    imports the package."""
+    import gc
+
+    gc.set_threshold(10_000, 20, 10)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``mechderive`` console script; returns the exit status (module docstring).
 
@@ -255,6 +266,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     pipe the status is 141 instead.
     """
     try:
+        if argv is None:  # the process is this command's alone (see _collect_less)
+            _collect_less()
         words = sys.argv[1:] if argv is None else list(argv)
         parser = build_parser(words[0] if words and words[0] in COMMANDS else None)
         args = parse_args(parser, words)
