@@ -224,12 +224,16 @@ class HeavyTopModel(LagrangianModel):
             raise DerivationError(f"expected one solution for (p_φ, p_ψ) in a, b, got {sol}")
         return {pf: sol[0][0], ps: sol[0][1]}
 
+    def _rate_in_ab(self, name: str) -> sp.Expr:
+        """The cyclic velocity ``name`` solved from the conserved momenta, in a, b and θ, as it comes."""
+        return self.cyclic_velocities[state_symbol(name)].subs(self.momenta_in_ab)
+
     def _rate_in_u(self, name: str) -> sp.Expr:
-        """The cyclic velocity ``name`` solved from the conserved momenta, in a, b and u = cos θ: one fraction."""
-        return _in_u(self.cyclic_velocities[state_symbol(name)].subs(self.momenta_in_ab))
+        """The cyclic velocity ``name`` in a, b and u = cos θ: one fraction."""
+        return _in_u(self._rate_in_ab(name))
 
     def _rate(self, name: str) -> sp.Expr:
-        return _theta_form(self.cyclic_velocities[state_symbol(name)].subs(self.momenta_in_ab))
+        return _theta_form(self._rate_in_ab(name))
 
     @derived
     def precession_rate_theta(self) -> sp.Expr:
