@@ -231,10 +231,11 @@ def load_library(name: str, build_source: Callable[[], str]) -> ctypes.CDLL:
         lib = _load_cached(file) if disk else None
         how = "disk"
         if lib is None:
-            from .model import derivation_seconds
+            from .model import derivation_seconds, deriving
 
             before = derivation_seconds()
-            source = build_source()
+            with deriving():
+                source = build_source()
             start += derivation_seconds() - before  # the derivation is reported as such, not as compiling
             data = _compile(source, file)
             if disk:

@@ -295,7 +295,10 @@ def prefetch(jobs: Sequence[tuple[str, Callable[[], tuple[Sequence[Any], Any]], 
     if threading.active_count() > 1:
         return False
     if prepare is not None:
-        prepare()
+        from .model import deriving
+
+        with deriving():
+            prepare()
         if threading.active_count() > 1:  # pragma: no cover - a derivation started a thread: no fork
             return False
     sys.stdout.flush()
@@ -365,14 +368,16 @@ def cached_lambdify(name: str, build: Callable[[], tuple[Sequence[Any], Any]], *
     if loaded is not None:
         how = "parallel" if child is not None else "disk"
     else:
-        import numpy as np
-        import sympy as sp
-
-        from .model import derivation_seconds
+        from .model import derivation_seconds, deriving
 
         before = derivation_seconds()
-        args, exprs = build()
+        with deriving():
+            import sympy as sp
+
+            args, exprs = build()
         start += derivation_seconds() - before  # the derivation is reported as such, not as compiling
+        import numpy as np
+
         if isinstance(exprs, sp.MatrixBase):
             shape, flat = exprs.shape, list(exprs)
         elif isinstance(exprs, (list, tuple)):

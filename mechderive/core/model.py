@@ -16,12 +16,13 @@ cache and logs the name in :attr:`SymbolicModel.compiled`.
 
 from __future__ import annotations
 
+import contextlib
 import time
 from typing import Any, Callable, Sequence, TypeVar
 
 from . import compile as _compile
 
-__all__ = ["SymbolicModel", "derived", "derivation_log", "derivation_seconds"]
+__all__ = ["SymbolicModel", "derived", "deriving", "derivation_log", "derivation_seconds"]
 
 #: ("Model.quantity", seconds) for every derivation in this process, in completion order.
 _DERIVATION_LOG: list[tuple[str, float]] = []
@@ -32,6 +33,23 @@ _TOP_LEVEL_SECONDS = [0.0]  # wall time spent in outermost derivations (no doubl
 def derivation_seconds() -> float:
     """Total wall time spent deriving in this process (nested derivations counted once)."""
     return _TOP_LEVEL_SECONDS[0]
+
+
+@contextlib.contextmanager
+def deriving() -> Any:
+    """Count the block's wall time as deriving, as an outermost derivation's (nested ones inside count once): the
+    work that builds what is then compiled — the imports it needs among it, SymPy's own on a cold start (0.4-1 s),
+    which was reported as the stage (solving, compiling) that happened to import it first."""
+    if _DEPTH[0]:
+        yield
+        return
+    start = time.perf_counter()
+    _DEPTH[0] += 1
+    try:
+        yield
+    finally:
+        _DEPTH[0] -= 1
+        _TOP_LEVEL_SECONDS[0] += time.perf_counter() - start
 
 
 def derivation_log() -> list[tuple[str, float]]:
