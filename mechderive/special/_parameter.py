@@ -24,8 +24,6 @@ j·2K costs ~|u|·1e-32 instead of j·ulp(2K).
 from __future__ import annotations
 
 import functools
-
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -48,15 +46,16 @@ __all__ = [
 CONSISTENCY_TOL = 1e-15
 
 
-@dataclass(frozen=True)
 class Parameter:
-    """A validated parameter array: m, m1 = 1 - m (m1_hi + m1_lo exactly), K = K_hi + K_lo."""
+    """A validated parameter array: m, m1 = 1 - m (m1_hi + m1_lo exactly), K = K_hi + K_lo.
 
-    m: np.ndarray
-    m1: np.ndarray
-    m1_lo: np.ndarray
-    K_hi: np.ndarray
-    K_lo: np.ndarray
+    A plain record (a frozen dataclass's generated methods took ~1 ms of every warm run's imports; its
+    ``==`` and hash were of no use on arrays)."""
+
+    __slots__ = ("m", "m1", "m1_lo", "K_hi", "K_lo")
+
+    def __init__(self, m: np.ndarray, m1: np.ndarray, m1_lo: np.ndarray, K_hi: np.ndarray, K_lo: np.ndarray) -> None:
+        self.m, self.m1, self.m1_lo, self.K_hi, self.K_lo = m, m1, m1_lo, K_hi, K_lo
 
     @property
     def kc(self) -> np.ndarray:
