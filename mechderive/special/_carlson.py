@@ -52,20 +52,23 @@ def _as_float(*args):
 
 def elliprf(x, y, z):
     """R_F(x, y, z) (DLMF 19.16.1) by duplication (Carlson 1995, algorithm 1)."""
-    x, y, z = (a.copy() for a in _as_float(x, y, z))
-    A0 = (x + y + z) / 3
-    Q = _q(x.dtype.type)[0] * np.maximum(np.abs(A0 - x), np.maximum(np.abs(A0 - y), np.abs(A0 - z)))
-    x0, y0 = x.copy(), y.copy()
-    A = A0.copy()
-    scale = np.ones_like(A)  # 4⁻ⁿ
+    x0, y0, z0 = _as_float(x, y, z)
+    A0 = (x0 + y0 + z0) / 3
+    Q = _q(x0.dtype.type)[0] * np.maximum(np.abs(A0 - x0), np.maximum(np.abs(A0 - y0), np.abs(A0 - z0)))
+    # x, y, z and A stacked: one ufunc call per step for all four (the closed forms' setups call this on a
+    # batch of one, where the calls, not the arithmetic, are the cost); each element's arithmetic is unchanged
+    xyzA = np.stack([x0, y0, z0, A0])
+    scale = 1.0  # 4⁻ⁿ, exact
     with np.errstate(all="ignore"):
         for _ in range(_MAX_STEPS):
-            if (scale * Q < np.abs(A)).all():
+            if (scale * Q < np.abs(xyzA[3])).all():
                 break
-            sx, sy, sz = np.sqrt(x), np.sqrt(y), np.sqrt(z)
+            s = np.sqrt(xyzA[:3])
+            sx, sy, sz = s
             lam = sx * sy + sx * sz + sy * sz
-            x, y, z, A = (x + lam) / 4, (y + lam) / 4, (z + lam) / 4, (A + lam) / 4
+            xyzA = (xyzA + lam) / 4
             scale = scale / 4
+        A = xyzA[3]
         X = (A0 - x0) * scale / A
         Y = (A0 - y0) * scale / A
         Z = -(X + Y)
