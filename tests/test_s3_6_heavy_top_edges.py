@@ -345,6 +345,10 @@ GENERAL = dict(theta=1.0, phi=0.3, psi=-0.2, theta_dot=0.4, phi_dot=0.7, psi_dot
 def _plant(top, what: str) -> None:
     """Make one constant of the closed form wrong (relative 1e-9 .. 1e-10), after it is computed."""
     from mechderive.core.phase import DD
+    from mechderive.systems.heavy_top.exact import _Angle
+
+    def replace(spec: _Angle, **changes) -> _Angle:
+        return _Angle(**{k: changes.get(k, getattr(spec, k)) for k in _Angle.__slots__})
 
     if what == "phase rate κ":
         k = top._kappa
@@ -354,11 +358,11 @@ def _plant(top, what: str) -> None:
     spec = angles["phi"]
     (c, n, pi0), *rest = spec.terms
     if what == "Π coefficient":
-        spec = spec._replace(terms=((c * (1 + 1e-9), n, pi0), *rest))
+        spec = replace(spec, terms=((c * (1 + 1e-9), n, pi0), *rest))
     elif what == "Π at the start":
-        spec = spec._replace(terms=((c, n, pi0 * (1 + 1e-9)), *rest))
+        spec = replace(spec, terms=((c, n, pi0 * (1 + 1e-9)), *rest))
     elif what == "advance per period":
-        spec = spec._replace(per_period=DD(spec.per_period.hi * (1 + 1e-9), 0.0))
+        spec = replace(spec, per_period=DD(spec.per_period.hi * (1 + 1e-9), 0.0))
     angles["phi"] = spec
     top.__dict__["_angles"] = angles
 

@@ -107,10 +107,11 @@ def _rc_one(e):
     e = np.asarray(e)
     if e.dtype != np.longdouble:
         e = e.astype(float)
-    series = 1 - e * (1 / 3 - e * (1 / 5 - e * (1 / 7 - e * (1 / 9 - e * (1 / 11 - e / 13)))))
     small = np.abs(e) < 1e-3
     if small.all():
-        return series
+        return _rc_one_series(e)
+    # (the series only where some point needs it: R_J's first steps have every |e| large)
+    series = _rc_one_series(e) if small.any() else None
     with np.errstate(all="ignore"):
         r = np.sqrt(np.abs(e))
         positive = e > 0
@@ -120,7 +121,12 @@ def _rc_one(e):
             closed = np.arctanh(r) / r
         else:
             closed = np.where(positive, np.arctan(r), np.arctanh(r)) / r
-    return np.where(small, series, closed)
+    return closed if series is None else np.where(small, series, closed)
+
+
+def _rc_one_series(e):
+    """R_C(1, 1 + e) = Σ (-e)ᵏ/(2k + 1) to k = 6, for |e| < 1e-3 (see :func:`_rc_one`)."""
+    return 1 - e * (1 / 3 - e * (1 / 5 - e * (1 / 7 - e * (1 / 9 - e * (1 / 11 - e / 13)))))
 
 
 def _rj_positive(x, y, z, p):
