@@ -344,9 +344,11 @@ GENERAL = dict(theta=1.0, phi=0.3, psi=-0.2, theta_dot=0.4, phi_dot=0.7, psi_dot
 
 def _plant(top, what: str) -> None:
     """Make one constant of the closed form wrong (relative 1e-9 .. 1e-10), after it is computed."""
-    from dataclasses import replace
-
     from mechderive.core.phase import DD
+    from mechderive.systems.heavy_top.exact import _Angle
+
+    def replace(spec: _Angle, **changes) -> _Angle:
+        return _Angle(**{k: changes.get(k, getattr(spec, k)) for k in _Angle.__slots__})
 
     if what == "phase rate κ":
         k = top._kappa

@@ -52,20 +52,23 @@ def _as_float(*args):
 
 def elliprf(x, y, z):
     """R_F(x, y, z) (DLMF 19.16.1) by duplication (Carlson 1995, algorithm 1)."""
-    x, y, z = (a.copy() for a in _as_float(x, y, z))
-    A0 = (x + y + z) / 3
-    Q = _q(x.dtype.type)[0] * np.maximum(np.abs(A0 - x), np.maximum(np.abs(A0 - y), np.abs(A0 - z)))
-    x0, y0 = x.copy(), y.copy()
-    A = A0.copy()
-    scale = np.ones_like(A)  # 4⁻ⁿ
+    x0, y0, z0 = _as_float(x, y, z)
+    A0 = (x0 + y0 + z0) / 3
+    Q = _q(x0.dtype.type)[0] * np.maximum(np.abs(A0 - x0), np.maximum(np.abs(A0 - y0), np.abs(A0 - z0)))
+    # x, y, z and A stacked: one ufunc call per step for all four (the closed forms' setups call this on a
+    # batch of one, where the calls, not the arithmetic, are the cost); each element's arithmetic is unchanged
+    xyzA = np.stack([x0, y0, z0, A0])
+    scale = 1.0  # 4⁻ⁿ, exact
     with np.errstate(all="ignore"):
         for _ in range(_MAX_STEPS):
-            if (scale * Q < np.abs(A)).all():
+            if (scale * Q < np.abs(xyzA[3])).all():
                 break
-            sx, sy, sz = np.sqrt(x), np.sqrt(y), np.sqrt(z)
+            s = np.sqrt(xyzA[:3])
+            sx, sy, sz = s
             lam = sx * sy + sx * sz + sy * sz
-            x, y, z, A = (x + lam) / 4, (y + lam) / 4, (z + lam) / 4, (A + lam) / 4
+            xyzA = (xyzA + lam) / 4
             scale = scale / 4
+        A = xyzA[3]
         X = (A0 - x0) * scale / A
         Y = (A0 - y0) * scale / A
         Z = -(X + Y)
@@ -104,10 +107,11 @@ def _rc_one(e):
     e = np.asarray(e)
     if e.dtype != np.longdouble:
         e = e.astype(float)
-    series = 1 - e * (1 / 3 - e * (1 / 5 - e * (1 / 7 - e * (1 / 9 - e * (1 / 11 - e / 13)))))
     small = np.abs(e) < 1e-3
     if small.all():
-        return series
+        return _rc_one_series(e)
+    # (the series only where some point needs it: R_J's first steps have every |e| large)
+    series = _rc_one_series(e) if small.any() else None
     with np.errstate(all="ignore"):
         r = np.sqrt(np.abs(e))
         positive = e > 0
@@ -117,7 +121,12 @@ def _rc_one(e):
             closed = np.arctanh(r) / r
         else:
             closed = np.where(positive, np.arctan(r), np.arctanh(r)) / r
-    return np.where(small, series, closed)
+    return closed if series is None else np.where(small, series, closed)
+
+
+def _rc_one_series(e):
+    """R_C(1, 1 + e) = Σ (-e)ᵏ/(2k + 1) to k = 6, for |e| < 1e-3 (see :func:`_rc_one`)."""
+    return 1 - e * (1 / 3 - e * (1 / 5 - e * (1 / 7 - e * (1 / 9 - e * (1 / 11 - e / 13)))))
 
 
 def _rj_positive(x, y, z, p):

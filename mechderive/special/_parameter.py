@@ -24,8 +24,6 @@ j·2K costs ~|u|·1e-32 instead of j·ulp(2K).
 from __future__ import annotations
 
 import functools
-
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -48,15 +46,16 @@ __all__ = [
 CONSISTENCY_TOL = 1e-15
 
 
-@dataclass(frozen=True)
 class Parameter:
-    """A validated parameter array: m, m1 = 1 - m (m1_hi + m1_lo exactly), K = K_hi + K_lo."""
+    """A validated parameter array: m, m1 = 1 - m (m1_hi + m1_lo exactly), K = K_hi + K_lo.
 
-    m: np.ndarray
-    m1: np.ndarray
-    m1_lo: np.ndarray
-    K_hi: np.ndarray
-    K_lo: np.ndarray
+    A plain record (a frozen dataclass's generated methods took ~1 ms of every warm run's imports; its
+    ``==`` and hash were of no use on arrays)."""
+
+    __slots__ = ("m", "m1", "m1_lo", "K_hi", "K_lo")
+
+    def __init__(self, m: np.ndarray, m1: np.ndarray, m1_lo: np.ndarray, K_hi: np.ndarray, K_lo: np.ndarray) -> None:
+        self.m, self.m1, self.m1_lo, self.K_hi, self.K_lo = m, m1, m1_lo, K_hi, K_lo
 
     @property
     def kc(self) -> np.ndarray:
@@ -103,11 +102,14 @@ def parameter(m: Any, m1: Any = None) -> Parameter:
 def quarter_period(m1_hi: np.ndarray, m1_lo: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """K = π/(2 AGM(1, √m1)) in double-double; K = inf where m1 = 0.
 
-    A scalar parameter (the usual case: one motion, many times) is computed once per value.
+    A scalar parameter (the usual case: one motion, many times) is computed once per value, and as a scalar: the
+    same arithmetic on NumPy scalars, half the time of an array of one point (the batched closed forms' batch of
+    one, :func:`mechderive.systems.heavy_top.batch._agm_k`).
     """
-    if np.ndim(m1_hi) == 0 and np.ndim(m1_lo) == 0:
-        K_hi, K_lo = _quarter_period_scalar(float(m1_hi), float(m1_lo))
-        return np.asarray(K_hi), np.asarray(K_lo)
+    if np.size(m1_hi) == 1 and np.size(m1_lo) == 1:
+        shape = np.broadcast(m1_hi, m1_lo).shape
+        K_hi, K_lo = _quarter_period_scalar(float(np.ravel(m1_hi)[0]), float(np.ravel(m1_lo)[0]))
+        return np.full(shape, K_hi), np.full(shape, K_lo)
     return _quarter_period(m1_hi, m1_lo)
 
 

@@ -25,8 +25,6 @@ tested to a few ulp of Π over one period.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 __all__ = ["PiSeries", "fit_pi_series", "fit_pi_series_for_motion"]
@@ -39,14 +37,19 @@ _SAMPLES = (128, 512)
 _TAIL = 2e-16
 
 
-@dataclass(frozen=True)
 class PiSeries:
-    """Π(n_i; am u | m) for characteristics n_i, as ``mean[i]·u + Σ_k sine[i, k-1] sin(kπu/K)``."""
+    """Π(n_i; am u | m) for characteristics n_i, as ``mean[i]·u + Σ_k sine[i, k-1] sin(kπu/K)``.
 
-    n: np.ndarray        # (k,) the characteristics
-    mean: np.ndarray     # (k,) a₀ = Π(n|m)/K
-    sine: np.ndarray     # (k, N) the sine coefficients a_k K/(kπ), k = 1..N
-    K: float
+    A plain class (a frozen dataclass's generated methods took ~1 ms of every warm run's imports; its ``==``
+    and hash were of no use on arrays)."""
+
+    __slots__ = ("n", "mean", "sine", "K")
+
+    def __init__(self, n: np.ndarray, mean: np.ndarray, sine: np.ndarray, K: float) -> None:
+        self.n = n        # (k,) the characteristics
+        self.mean = mean  # (k,) a₀ = Π(n|m)/K
+        self.sine = sine  # (k, N) the sine coefficients a_k K/(kπ), k = 1..N
+        self.K = K
 
     def __call__(self, u: np.ndarray) -> np.ndarray:
         """Π(n_i; am u | m) at u (any shape): shape (k, *u.shape)."""
@@ -118,7 +121,6 @@ _PANEL_WIDTH = 0.5
 _MAX_PANELS = 4000
 
 
-@dataclass(frozen=True)
 class PiPanels:
     """p(u) = Π(n; am u | m) - (Π(n|m)/K) u, the bounded part of Π, by panels from the quarter periods.
 
@@ -129,10 +131,15 @@ class PiPanels:
     u = e·K + v (e = 0, 1 the parity of the nearest quarter period, |v| ≤ K/2)
     p = sign(v)·p₀(|v|) or -sign(v)·p₁(|v|).  Unlike Π itself (≈ u/(1 - n), as large as K near
     the separatrix) nothing here is large, so p keeps an absolute accuracy of ~1e-16.
+
+    A plain class, as :class:`PiSeries` is.
     """
 
-    width: float
-    coef: np.ndarray  # (2, panels, degree + 2): p₀ and p₁ on each panel, in x ∈ [-1, 1]
+    __slots__ = ("width", "coef")
+
+    def __init__(self, width: float, coef: np.ndarray) -> None:
+        self.width = width
+        self.coef = coef  # (2, panels, degree + 2): p₀ and p₁ on each panel, in x ∈ [-1, 1]
 
     def __call__(self, e: np.ndarray, v: np.ndarray) -> np.ndarray:
         y = np.abs(v)

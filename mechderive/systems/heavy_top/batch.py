@@ -186,7 +186,11 @@ def _binary_exact(exprs: list) -> list:
 
 
 def _array(values: Any, n: int, dtype: type = np.float64) -> np.ndarray:
-    return np.broadcast_to(np.asarray(values, dtype=dtype), (n,)).astype(dtype)
+    """``values`` (a compiled column, or a constant) as a fresh array of n points in ``dtype``."""
+    arr = np.asarray(values, dtype=dtype)
+    if arr.shape == (n,):  # the usual column: a copy, without broadcast_to's Python wrapper (~76 calls a warm run)
+        return arr.copy()
+    return np.broadcast_to(arr, (n,)).astype(dtype)
 
 
 def _columns(f: Any, args: tuple, n: int) -> list[np.ndarray]:

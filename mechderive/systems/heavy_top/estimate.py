@@ -355,7 +355,8 @@ class _Estimator:
         # (a wrong phase rate or start), and the rounding of the reduced phase itself, a few ulp of
         # K, i.e. 4ε·K/κ in time — amplified by the rate at each sample (near a pole passage
         # |φ̇| ~ |b − a|/(1 − u2): this is what the planner's 3e-17 × conditioning stood for)
-        all_rates = np.abs(self._derived_rates(x, y)[self._INDEX[which]])
+        # (the four rates at the samples, evaluated once for the checks of φ, ψ, σ and δ)
+        all_rates = np.abs(self._get("sample_rates", lambda: self._derived_rates(x, y))[self._INDEX[which]])
         all_rates = np.where(np.isfinite(all_rates), all_rates, 0.0)
         shift = self.nutation()["time_shift"] + 4 * _EPS * (sol._period.hi / 2) / self._kappa()
         t_rounding = float(np.max(all_rates * np.broadcast_to(shift, all_rates.shape)))
