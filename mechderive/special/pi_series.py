@@ -86,9 +86,10 @@ def fit_pi_series(n: np.ndarray, sn_squared, K: float) -> PiSeries | None:
     for samples in _SAMPLES:
         u = (2.0 * K / samples) * np.arange(samples)
         g = 1.0 / (1.0 - n[:, None] * sn_squared(u)[None, :])       # (k, M), one period, even in u
-        # a₀ and a_k/2 = (1/M) Σ_j g_j cos(2πjk/M) for k ≤ M/4, the angles reduced exactly (jk mod M)
+        # a₀ and a_k/2 = (1/M) Σ_j g_j cos(2πjk/M) for k ≤ M/4, the angles reduced exactly (jk mod M): the
+        # table's entries are the M values cos(2πi/M), looked up (not its (M/4 + 1)·M cosines evaluated)
         k = np.arange(samples // 4 + 1)
-        cosines = np.cos((2.0 * np.pi / samples) * (np.outer(np.arange(samples), k) % samples))
+        cosines = np.cos((2.0 * np.pi / samples) * np.arange(samples))[np.outer(np.arange(samples), k) % samples]
         spectrum = (g @ cosines) / samples
         a = 2.0 * spectrum[:, 1: samples // 4 + 1]
         small = np.all(np.abs(a) <= _TAIL * np.max(np.abs(g), axis=1)[:, None], axis=0)
