@@ -424,7 +424,8 @@ class _Estimator:
             K = self.sol._period.hi / 2
             xg, wg = _gauss_legendre()
             all_nodes, all_weights, all_parity, owner = [], [], [], []
-            for i, (parity, lo, hi) in enumerate(todo):
+            stop = 0
+            for key_index, (parity, lo, hi) in enumerate(todo):
                 if hi <= lo:
                     continue
                 width = self._spike_widths()[parity]
@@ -443,29 +444,38 @@ class _Estimator:
                             edges.add(sgn * d)
                         d *= 4
                 edges.update(c for c in (0.0,) if lo < c < hi)
-                e = np.array(sorted(edges))
-                # (sorted(set(...)), not np.unique: NumPy 2's unique imports numpy.ma, ~20 ms of a warm run)
-                e = np.array(sorted(set(np.concatenate([np.linspace(a, b, int(np.ceil((b - a) / longest)) + 1)
-                                                        for a, b in zip(e[:-1], e[1:])]).tolist())))
+                # gaps longer than ``longest`` cut evenly (linspace's ends are the gap's own: only a gap in
+                # more than one piece needs it); sorted(set(...)), not np.unique: NumPy 2's unique imports
+                # numpy.ma, ~20 ms of a warm run
+                e = sorted(edges)
+                cuts = set(e)
+                for a, b in zip(e[:-1], e[1:]):
+                    pieces = math.ceil((b - a) / longest)
+                    if pieces > 1:
+                        cuts.update(np.linspace(a, b, pieces + 1).tolist())
+                e = np.array(sorted(cuts))
                 mid, halfw = 0.5 * (e[1:] + e[:-1]), 0.5 * (e[1:] - e[:-1])
                 nodes = (mid[:, None] + halfw[:, None] * xg[None, :]).ravel()
                 all_nodes.append(nodes)
                 all_weights.append((halfw[:, None] * wg[None, :]).ravel())
                 all_parity.append(np.full(nodes.shape, parity))
-                owner.append(np.full(nodes.shape, i))
+                owner.append((key_index, stop, stop + nodes.size))  # each key's nodes, contiguous
+                stop += nodes.size
             out = {k: (np.zeros(4), np.zeros(4)) for k in todo}
             if all_nodes:
                 nodes, weights = np.concatenate(all_nodes), np.concatenate(all_weights)
                 ps = _Pass(self.sol, np.zeros(nodes.shape))
                 ps._cache["turning"] = (np.concatenate(all_parity), nodes, np.zeros(nodes.shape))
                 x, y = ps.one_minus_plus_u()
-                rates = np.array([np.where(np.isfinite(r), r, 0.0) for r in self._derived_rates(x, y)])
-                who = np.concatenate(owner)
-                for i, key in enumerate(todo):
-                    sel = who == i
-                    if np.any(sel):
-                        w = weights[sel]
-                        out[key] = (rates[:, sel] @ w, np.abs(rates[:, sel]) @ w)
+                rates = np.array(self._derived_rates(x, y))
+                rates = np.where(np.isfinite(rates), rates, 0.0)
+                abs_rates = np.abs(rates)
+                # each key's columns as fresh Fortran-ordered copies, the layout a boolean mask's selection
+                # has: the products' order of summation (BLAS) follows the operands' layout
+                for key_index, start, end in owner:
+                    w = weights[start:end].copy()
+                    out[todo[key_index]] = (np.asfortranarray(rates[:, start:end]) @ w,
+                                            np.asfortranarray(abs_rates[:, start:end]) @ w)
             memo.update(out)
         return memo
 
