@@ -65,13 +65,17 @@ class PiSeries:
         u = np.asarray(u, dtype=float)
         theta = (np.pi / self.K) * u
         c2 = 2.0 * np.cos(theta)
-        # Clenshaw for Σ_{k=1}^{N} s_k sin(kθ): y_k = s_k + 2cos θ y_{k+1} - y_{k+2}, sum = y_1 sin θ
-        shape = (len(self.n),) + (1,) * u.ndim
-        y1 = np.zeros((len(self.n),) + u.shape)
-        y2 = np.zeros_like(y1)
-        for k in range(self.sine.shape[1] - 1, -1, -1):
-            y1, y2 = self.sine[:, k].reshape(shape) + c2 * y1 - y2, y1
-        return y1 * np.sin(theta)
+        # Clenshaw for Σ_{k=1}^{N} s_k sin(kθ): y_k = s_k + 2cos θ y_{k+1} - y_{k+2}, sum = y_1 sin θ; one
+        # characteristic at a time, its coefficients as numbers (all at once, each step broadcast a column of
+        # them over the (k, *u.shape) arrays: ~60 % more instructions for the same values)
+        sums = np.empty((len(self.n),) + u.shape)
+        for i, coefficients in enumerate(self.sine.tolist()):
+            y1 = np.zeros(u.shape)
+            y2 = np.zeros(u.shape)
+            for s_k in reversed(coefficients):
+                y1, y2 = s_k + c2 * y1 - y2, y1
+            sums[i] = y1
+        return sums * np.sin(theta)
 
 
 def fit_pi_series(n: np.ndarray, sn_squared, K: float) -> PiSeries | None:
