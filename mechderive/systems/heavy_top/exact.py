@@ -420,6 +420,18 @@ class _Pass:
         return self._get("1-u,1+u", make)
 
     def angle(self, spec: _Angle, *, reduced: bool) -> np.ndarray:
+        """φ or ψ (``spec``) at the pass's times, continuous or (``reduced``) with its whole periods reduced
+        modulo 2π; computed once per pass (read-only): the output and the error estimate's angle checks,
+        which check the very values output, share it.  (Not listed in ``computed``: a combination of what is.)"""
+        key = f"angle({spec.name},{reduced})"
+        if key not in self._cache:
+            value = self._angle(spec, reduced)
+            if isinstance(value, np.ndarray):
+                value.flags.writeable = False
+            self._cache[key] = value
+        return self._cache[key]
+
+    def _angle(self, spec: _Angle, reduced: bool) -> np.ndarray:
         sol, t = self.sol, self.t
         if sol.kind == "steady":
             return spec.start + (mod_two_pi(spec.rate, t) if reduced else spec.rate * t)
