@@ -25,6 +25,8 @@ tested to a few ulp of Π over one period.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 __all__ = ["PiSeries", "fit_pi_series", "fit_pi_series_for_motion"]
@@ -109,12 +111,19 @@ def fit_pi_series(n: np.ndarray, sn_squared, K: float) -> PiSeries | None:
     return None
 
 
-def fit_pi_series_for_motion(n: np.ndarray, m: float, m1: float, K: float) -> PiSeries | None:
-    """:func:`fit_pi_series` with sn² from :func:`mechderive.special.jacobi.jacobi_sn_cn_dn` at
-    parameter m (complement ``m1``, given as exactly as known) — what the closed-form tops use."""
-    from .jacobi import jacobi_sn_cn_dn
+def fit_pi_series_for_motion(n: np.ndarray, m: float, m1: float, K: float, *, parameter: Any = None
+                             ) -> PiSeries | None:
+    """:func:`fit_pi_series` with sn² as :func:`mechderive.special.jacobi.jacobi_sn_cn_dn` gives it at
+    parameter m (complement ``m1``, given as exactly as known) — what the closed-form tops use.
 
-    return fit_pi_series(n, lambda u: jacobi_sn_cn_dn(u, m, m1=m1)[0] ** 2, K)
+    ``parameter``: (m, m1) already validated (:func:`mechderive.special._parameter.parameter`), if the caller
+    has it: not validated again (the samples are finite doubles, so sn is the same).
+    """
+    from ._parameter import parameter as validated
+    from ._sncndn import reduced_sn_cn_dn
+
+    p = validated(m, m1) if parameter is None else parameter
+    return fit_pi_series(n, lambda u: reduced_sn_cn_dn(u, p)[0] ** 2, K)
 
 
 #: Chebyshev degree per panel, and panel width as a fraction of the distance δ of the integrand's

@@ -699,7 +699,7 @@ class HeavyTopSolution:
 
             ns = sorted(n for n, n1 in self._mp.get("one_minus_n", {}).items() if n1 >= 1e-3)
             self._mp["pi_series"] = None if not ns or self._period is None else pi_series.fit_pi_series_for_motion(
-                np.array(ns), self.m, self.m1, self._period.hi / 2)
+                np.array(ns), self.m, self.m1, self._period.hi / 2, parameter=self._jacobi_parameter)
         return self._mp["pi_series"]
 
     @functools.cached_property
