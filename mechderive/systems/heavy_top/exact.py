@@ -733,13 +733,16 @@ class HeavyTopSolution:
         ph, pl = two_prod(j, per.hi)  # exact: j is an integer below 2**53
         pl = pl + j * per.lo
         rh, rl = dd_add(hi, lo, -ph, -pl)
-        # the floor of the rounded hi part can be off by one at a period boundary: correct it
+        # the floor of the rounded hi part can be off by one at a period boundary: correct it (where it is: at
+        # most a few samples, usually none — a correction nowhere needed is not computed)
         for low in (rh < 0, (rh == 0) & (rl < 0)):
-            ah, al = dd_add(rh, rl, per.hi, per.lo)
-            rh, rl, j = np.where(low, ah, rh), np.where(low, al, rl), np.where(low, j - 1, j)
+            if low.any():
+                ah, al = dd_add(rh, rl, per.hi, per.lo)
+                rh, rl, j = np.where(low, ah, rh), np.where(low, al, rl), np.where(low, j - 1, j)
         high = (rh > per.hi) | ((rh == per.hi) & (rl >= per.lo))
-        ah, al = dd_add(rh, rl, -per.hi, -per.lo)
-        rh, rl, j = np.where(high, ah, rh), np.where(high, al, rl), np.where(high, j + 1, j)
+        if high.any():
+            ah, al = dd_add(rh, rl, -per.hi, -per.lo)
+            rh, rl, j = np.where(high, ah, rh), np.where(high, al, rl), np.where(high, j + 1, j)
         return j, rh, rl
 
     # --- one pass over many quantities ---------------------------------------------------------
