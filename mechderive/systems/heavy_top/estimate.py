@@ -185,7 +185,8 @@ class _Estimator:
         d1, d2, d3 = self._differences(x, y)
         gm, gp = self.sol._mp["gaps_minus"], self.sol._mp["gaps_plus"]
         upper = x <= y
-        r = [_EPS * np.maximum(np.where(upper, abs(m), abs(p)), np.where(upper, x, y)) for m, p in zip(gm, gp)]
+        nearer = np.where(upper, x, y)  # the smaller of 1 ∓ u
+        r = [_EPS * np.maximum(np.where(upper, abs(m), abs(p)), nearer) for m, p in zip(gm, gp)]
         noise = beta * (r[0] * np.abs(d2 * d3) + r[1] * np.abs(d1 * d3) + r[2] * np.abs(d1 * d2))
         return beta * d1 * d2 * d3, beta * (d2 * d3 + d1 * d3 + d1 * d2), noise
 
