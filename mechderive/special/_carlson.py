@@ -61,7 +61,7 @@ def elliprf(x, y, z):
     scale = 1.0  # 4⁻ⁿ, exact
     with np.errstate(all="ignore"):
         for _ in range(_MAX_STEPS):
-            if (scale * Q < np.abs(xyzA[3])).all():
+            if (scale * Q < xyzA[3]).all():  # (A > 0 in the domain: |A| is A; a NaN stops neither)
                 break
             s = np.sqrt(xyzA[:3])
             sx, sy, sz = s
@@ -105,7 +105,7 @@ def _rc_one(e):
     Only the branches some point needs are evaluated (this is R_J's inner loop).
     """
     e = np.asarray(e)
-    if e.dtype != np.longdouble:
+    if e.dtype != np.longdouble and e.dtype != np.float64:
         e = e.astype(float)
     small = np.abs(e) < 1e-3
     if small.all():
@@ -147,7 +147,7 @@ def _rj_positive(x, y, z, p):
     total = 0.0
     with np.errstate(all="ignore"):
         for _ in range(_MAX_STEPS):
-            if (scale * Q < np.abs(A)).all():
+            if (scale * Q < A).all():  # (A > 0 for p > 0: |A| is A)
                 break
             sx, sy, sz, sp = np.sqrt(x), np.sqrt(y), np.sqrt(z), np.sqrt(p)
             lam = sx * sy + sx * sz + sy * sz

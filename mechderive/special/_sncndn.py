@@ -184,16 +184,17 @@ def reduced_sn_cn_dn(u: np.ndarray, p: Parameter):
     shift was used, and sn, cn at the shifted argument v.
     """
     q = _per_parameter(p)
+    # u and the parameter's arrays are not broadcast up front: the ufuncs broadcast them (the same values;
+    # every result below has the common shape through u - j·2K), and only a selection needs the full shape
     shape = np.broadcast(u, p.m).shape
-    u = np.broadcast_to(u, shape)
-    m = np.broadcast_to(p.m, shape)
-    one, K_hi, K_lo = (np.broadcast_to(q[k], shape) for k in ("one", "K_hi", "K_lo"))
+    m = p.m
+    one, K_hi, K_lo = q["one"], q["K_hi"], q["K_lo"]
     too_big = (np.abs(u) > _MAX_PERIODS * K_hi) & ~one
-    if np.any(too_big):
+    if too_big.any():
         i = np.flatnonzero(too_big.ravel())[0]
         raise InvalidInputError(
-            f"expected |u| <= 2**52·K(m) = {_MAX_PERIODS * K_hi.ravel()[i]:.6g} (beyond it adjacent doubles "
-            f"are more than a quarter period apart), got u = {float(u.ravel()[i])!r}"
+            f"expected |u| <= 2**52·K(m) = {_MAX_PERIODS * np.broadcast_to(K_hi, shape).ravel()[i]:.6g} (beyond it "
+            f"adjacent doubles are more than a quarter period apart), got u = {float(np.broadcast_to(u, shape).ravel()[i])!r}"
         )
     j, r_hi, r_lo = reduce_by_half_periods(u, np.where(one, np.inf, K_hi), K_lo)
     sign = np.where(r_hi < 0, -1.0, 1.0)
@@ -206,12 +207,12 @@ def reduced_sn_cn_dn(u: np.ndarray, p: Parameter):
     v_hi, v_lo = vsign * v_hi, vsign * v_lo
     S, C, D = _sncndn_small(v_hi, v_lo, m, q["levels"], q["g_hi"], q["g_lo"])
     hyperbolic = q["hyperbolic"]
-    if np.all(hyperbolic):
+    if hyperbolic.all():
         C, D = _cn_dn_sech_series(v_hi, v_lo, K_hi, *q["gp"], q["k"], q["n_terms"])
-    elif np.any(hyperbolic):
+    elif hyperbolic.any():
         sel = np.broadcast_to(hyperbolic, shape)
-        gp_hi, gp_lo, k = (np.broadcast_to(x, shape)[sel] for x in (*q["gp"], q["k"]))
-        C_h, D_h = _cn_dn_sech_series(v_hi[sel], v_lo[sel], K_hi[sel], gp_hi, gp_lo, k, q["n_terms"])
+        gp_hi, gp_lo, k, K_sel = (np.broadcast_to(x, shape)[sel] for x in (*q["gp"], q["k"], K_hi))
+        C_h, D_h = _cn_dn_sech_series(v_hi[sel], v_lo[sel], K_sel, gp_hi, gp_lo, k, q["n_terms"])
         C, D = C.copy(), D.copy()
         C[sel], D[sel] = C_h, D_h
     S = vsign * S
@@ -219,7 +220,7 @@ def reduced_sn_cn_dn(u: np.ndarray, p: Parameter):
     sn_a = np.where(flip, C / D, S)
     cn_a = np.where(flip, kc * S / D, C)
     dn_a = np.where(flip, kc / D, D)
-    if np.any(one):                      # m = 1 exactly: tanh, sech, sech
+    if one.any():                        # m = 1 exactly: tanh, sech, sech
         e = np.exp(-2.0 * np.abs(u))
         sech = 2.0 * np.sqrt(e) / (1.0 + e)
         sn_a = np.where(one, np.tanh(np.abs(u)), sn_a)

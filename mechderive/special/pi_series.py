@@ -25,6 +25,8 @@ tested to a few ulp of Π over one period.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 __all__ = ["PiSeries", "fit_pi_series", "fit_pi_series_for_motion"]
@@ -65,13 +67,17 @@ class PiSeries:
         u = np.asarray(u, dtype=float)
         theta = (np.pi / self.K) * u
         c2 = 2.0 * np.cos(theta)
-        # Clenshaw for Σ_{k=1}^{N} s_k sin(kθ): y_k = s_k + 2cos θ y_{k+1} - y_{k+2}, sum = y_1 sin θ
-        shape = (len(self.n),) + (1,) * u.ndim
-        y1 = np.zeros((len(self.n),) + u.shape)
-        y2 = np.zeros_like(y1)
-        for k in range(self.sine.shape[1] - 1, -1, -1):
-            y1, y2 = self.sine[:, k].reshape(shape) + c2 * y1 - y2, y1
-        return y1 * np.sin(theta)
+        # Clenshaw for Σ_{k=1}^{N} s_k sin(kθ): y_k = s_k + 2cos θ y_{k+1} - y_{k+2}, sum = y_1 sin θ; one
+        # characteristic at a time, its coefficients as numbers (all at once, each step broadcast a column of
+        # them over the (k, *u.shape) arrays: ~60 % more instructions for the same values)
+        sums = np.empty((len(self.n),) + u.shape)
+        for i, coefficients in enumerate(self.sine.tolist()):
+            y1 = np.zeros(u.shape)
+            y2 = np.zeros(u.shape)
+            for s_k in reversed(coefficients):
+                y1, y2 = s_k + c2 * y1 - y2, y1
+            sums[i] = y1
+        return sums * np.sin(theta)
 
 
 def fit_pi_series(n: np.ndarray, sn_squared, K: float) -> PiSeries | None:
@@ -86,9 +92,10 @@ def fit_pi_series(n: np.ndarray, sn_squared, K: float) -> PiSeries | None:
     for samples in _SAMPLES:
         u = (2.0 * K / samples) * np.arange(samples)
         g = 1.0 / (1.0 - n[:, None] * sn_squared(u)[None, :])       # (k, M), one period, even in u
-        # a₀ and a_k/2 = (1/M) Σ_j g_j cos(2πjk/M) for k ≤ M/4, the angles reduced exactly (jk mod M)
+        # a₀ and a_k/2 = (1/M) Σ_j g_j cos(2πjk/M) for k ≤ M/4, the angles reduced exactly (jk mod M): the
+        # table's entries are the M values cos(2πi/M), looked up (not its (M/4 + 1)·M cosines evaluated)
         k = np.arange(samples // 4 + 1)
-        cosines = np.cos((2.0 * np.pi / samples) * (np.outer(np.arange(samples), k) % samples))
+        cosines = np.cos((2.0 * np.pi / samples) * np.arange(samples))[np.outer(np.arange(samples), k) % samples]
         spectrum = (g @ cosines) / samples
         a = 2.0 * spectrum[:, 1: samples // 4 + 1]
         small = np.all(np.abs(a) <= _TAIL * np.max(np.abs(g), axis=1)[:, None], axis=0)
@@ -104,12 +111,19 @@ def fit_pi_series(n: np.ndarray, sn_squared, K: float) -> PiSeries | None:
     return None
 
 
-def fit_pi_series_for_motion(n: np.ndarray, m: float, m1: float, K: float) -> PiSeries | None:
-    """:func:`fit_pi_series` with sn² from :func:`mechderive.special.jacobi.jacobi_sn_cn_dn` at
-    parameter m (complement ``m1``, given as exactly as known) — what the closed-form tops use."""
-    from .jacobi import jacobi_sn_cn_dn
+def fit_pi_series_for_motion(n: np.ndarray, m: float, m1: float, K: float, *, parameter: Any = None
+                             ) -> PiSeries | None:
+    """:func:`fit_pi_series` with sn² as :func:`mechderive.special.jacobi.jacobi_sn_cn_dn` gives it at
+    parameter m (complement ``m1``, given as exactly as known) — what the closed-form tops use.
 
-    return fit_pi_series(n, lambda u: jacobi_sn_cn_dn(u, m, m1=m1)[0] ** 2, K)
+    ``parameter``: (m, m1) already validated (:func:`mechderive.special._parameter.parameter`), if the caller
+    has it: not validated again (the samples are finite doubles, so sn is the same).
+    """
+    from ._parameter import parameter as validated
+    from ._sncndn import reduced_sn_cn_dn
+
+    p = validated(m, m1) if parameter is None else parameter
+    return fit_pi_series(n, lambda u: reduced_sn_cn_dn(u, p)[0] ** 2, K)
 
 
 #: Chebyshev degree per panel, and panel width as a fraction of the distance δ of the integrand's

@@ -32,7 +32,6 @@ error against 30-digit references on ordinary and edge motions, and plant wrong 
 
 from __future__ import annotations
 
-import functools
 import math
 from typing import Any
 
@@ -60,34 +59,31 @@ _PSI = ("psi", "psi_wrapped", "psi_dot")
 _HALF = ("R", "omega")
 
 
-@functools.cache
-def _gauss_legendre(n: int = _NODES) -> tuple[np.ndarray, np.ndarray]:
-    """Gauss–Legendre nodes and weights on [-1, 1] (DLMF 3.5.19): Newton's method on P_n, P_n and P_n'
-    by the three-term recurrence (DLMF 18.9.1), to full double precision.  (``numpy.polynomial.legendre.leggauss``
-    gives the same; importing ``numpy.polynomial`` cost ~6 ms of a warm ``mechderive run``.)
+#: The :data:`_NODES`-point Gauss–Legendre nodes (ascending) and weights on [-1, 1] (DLMF 3.5.19), nodes to an
+#: ulp, weights to ~1e-14, written out: computing them (the eigenvalues of the Jacobi matrix, Golub and Welsch
+#: 1969, then Newton's method on P_n by the three-term recurrence, DLMF 18.9.1) was ~3 % of every warm run's
+#: solve stage, and ``numpy.polynomial``'s import ~6 ms.  tests/test_s3_6_heavy_top_edges.py derives them.
+_GL_X = np.array([
+    -0.9951872199970213, -0.9747285559713095, -0.9382745520027328, -0.8864155270044011, -0.820001985973903,
+    -0.7401241915785544, -0.6480936519369755, -0.5454214713888396, -0.4337935076260451, -0.3150426796961634,
+    -0.1911188674736163, -0.06405689286260562, 0.06405689286260562, 0.19111886747361634, 0.3150426796961634,
+    0.4337935076260451, 0.5454214713888396, 0.6480936519369755, 0.7401241915785544, 0.820001985973903,
+    0.8864155270044011, 0.9382745520027328, 0.9747285559713095, 0.9951872199970213,
+])
+_GL_W = np.array([
+    0.012341229799987334, 0.02853138862893381, 0.044277438817419676, 0.05929858491543666, 0.07334648141108027,
+    0.08619016153195322, 0.09761865210411391, 0.10744427011596562, 0.11550566805372561, 0.12167047292780338,
+    0.12583745634682839, 0.12793819534675224, 0.12793819534675224, 0.1258374563468283, 0.12167047292780338,
+    0.11550566805372561, 0.10744427011596562, 0.09761865210411391, 0.08619016153195322, 0.07334648141108027,
+    0.05929858491543666, 0.044277438817419676, 0.02853138862893381, 0.012341229799987334,
+])
+_GL_X.flags.writeable = False
+_GL_W.flags.writeable = False
 
-    Started from the eigenvalues of the recurrence's symmetric tridiagonal (Jacobi) matrix, off-diagonal
-    k/√(4k² − 1) (Golub and Welsch 1969), which are the nodes to ~1e-16: one Newton step confirms them
-    (from the asymptotic x_k ≈ cos(π(k − 1/4)/(n + 1/2)), ~1e-3 off, it took four, each a pass of the
-    recurrence: ~4 % of the default scene's solve stage).
-    """
-    k = np.arange(1, n)
-    off = k / np.sqrt(4.0 * k * k - 1.0)
-    x = np.linalg.eigvalsh(np.diag(off, 1) + np.diag(off, -1))[::-1]  # descending, as returned reversed below
-    for _ in range(10):  # quadratic convergence: the eigenvalues' ~1e-16 error needs one step
-        p0, p1 = np.ones_like(x), x
-        for k in range(2, n + 1):
-            p0, p1 = p1, ((2 * k - 1) * x * p1 - (k - 1) * p0) / k
-        dp = n * (x * p1 - p0) / (x * x - 1)  # P_n'(x)
-        step = p1 / dp
-        x = x - step
-        if np.max(np.abs(step)) <= 1e-15:
-            break
-    p0, p1 = np.ones_like(x), x
-    for k in range(2, n + 1):
-        p0, p1 = p1, ((2 * k - 1) * x * p1 - (k - 1) * p0) / k
-    dp = n * (x * p1 - p0) / (x * x - 1)
-    return x[::-1].copy(), 2 / ((1 - x[::-1] ** 2) * dp[::-1] ** 2)
+
+def _gauss_legendre() -> tuple[np.ndarray, np.ndarray]:
+    """The Gauss–Legendre rule of the panels: (:data:`_GL_X`, :data:`_GL_W`)."""
+    return _GL_X, _GL_W
 
 
 def estimate(sol: Any, ps: Any, names: list[str]) -> float:
@@ -189,7 +185,8 @@ class _Estimator:
         d1, d2, d3 = self._differences(x, y)
         gm, gp = self.sol._mp["gaps_minus"], self.sol._mp["gaps_plus"]
         upper = x <= y
-        r = [_EPS * np.maximum(np.where(upper, abs(m), abs(p)), np.where(upper, x, y)) for m, p in zip(gm, gp)]
+        nearer = np.where(upper, x, y)  # the smaller of 1 ∓ u
+        r = [_EPS * np.maximum(np.where(upper, abs(m), abs(p)), nearer) for m, p in zip(gm, gp)]
         noise = beta * (r[0] * np.abs(d2 * d3) + r[1] * np.abs(d1 * d3) + r[2] * np.abs(d1 * d2))
         return beta * d1 * d2 * d3, beta * (d2 * d3 + d1 * d3 + d1 * d2), noise
 
@@ -428,7 +425,8 @@ class _Estimator:
             K = self.sol._period.hi / 2
             xg, wg = _gauss_legendre()
             all_nodes, all_weights, all_parity, owner = [], [], [], []
-            for i, (parity, lo, hi) in enumerate(todo):
+            stop = 0
+            for key_index, (parity, lo, hi) in enumerate(todo):
                 if hi <= lo:
                     continue
                 width = self._spike_widths()[parity]
@@ -447,29 +445,38 @@ class _Estimator:
                             edges.add(sgn * d)
                         d *= 4
                 edges.update(c for c in (0.0,) if lo < c < hi)
-                e = np.array(sorted(edges))
-                # (sorted(set(...)), not np.unique: NumPy 2's unique imports numpy.ma, ~20 ms of a warm run)
-                e = np.array(sorted(set(np.concatenate([np.linspace(a, b, int(np.ceil((b - a) / longest)) + 1)
-                                                        for a, b in zip(e[:-1], e[1:])]).tolist())))
+                # gaps longer than ``longest`` cut evenly (linspace's ends are the gap's own: only a gap in
+                # more than one piece needs it); sorted(set(...)), not np.unique: NumPy 2's unique imports
+                # numpy.ma, ~20 ms of a warm run
+                e = sorted(edges)
+                cuts = set(e)
+                for a, b in zip(e[:-1], e[1:]):
+                    pieces = math.ceil((b - a) / longest)
+                    if pieces > 1:
+                        cuts.update(np.linspace(a, b, pieces + 1).tolist())
+                e = np.array(sorted(cuts))
                 mid, halfw = 0.5 * (e[1:] + e[:-1]), 0.5 * (e[1:] - e[:-1])
                 nodes = (mid[:, None] + halfw[:, None] * xg[None, :]).ravel()
                 all_nodes.append(nodes)
                 all_weights.append((halfw[:, None] * wg[None, :]).ravel())
                 all_parity.append(np.full(nodes.shape, parity))
-                owner.append(np.full(nodes.shape, i))
+                owner.append((key_index, stop, stop + nodes.size))  # each key's nodes, contiguous
+                stop += nodes.size
             out = {k: (np.zeros(4), np.zeros(4)) for k in todo}
             if all_nodes:
                 nodes, weights = np.concatenate(all_nodes), np.concatenate(all_weights)
                 ps = _Pass(self.sol, np.zeros(nodes.shape))
                 ps._cache["turning"] = (np.concatenate(all_parity), nodes, np.zeros(nodes.shape))
                 x, y = ps.one_minus_plus_u()
-                rates = np.array([np.where(np.isfinite(r), r, 0.0) for r in self._derived_rates(x, y)])
-                who = np.concatenate(owner)
-                for i, key in enumerate(todo):
-                    sel = who == i
-                    if np.any(sel):
-                        w = weights[sel]
-                        out[key] = (rates[:, sel] @ w, np.abs(rates[:, sel]) @ w)
+                rates = np.array(self._derived_rates(x, y))
+                rates = np.where(np.isfinite(rates), rates, 0.0)
+                abs_rates = np.abs(rates)
+                # each key's columns as fresh Fortran-ordered copies, the layout a boolean mask's selection
+                # has: the products' order of summation (BLAS) follows the operands' layout
+                for key_index, start, end in owner:
+                    w = weights[start:end].copy()
+                    out[todo[key_index]] = (np.asfortranarray(rates[:, start:end]) @ w,
+                                            np.asfortranarray(abs_rates[:, start:end]) @ w)
             memo.update(out)
         return memo
 

@@ -420,6 +420,18 @@ class _Pass:
         return self._get("1-u,1+u", make)
 
     def angle(self, spec: _Angle, *, reduced: bool) -> np.ndarray:
+        """φ or ψ (``spec``) at the pass's times, continuous or (``reduced``) with its whole periods reduced
+        modulo 2π; computed once per pass (read-only): the output and the error estimate's angle checks,
+        which check the very values output, share it.  (Not listed in ``computed``: a combination of what is.)"""
+        key = f"angle({spec.name},{reduced})"
+        if key not in self._cache:
+            value = self._angle(spec, reduced)
+            if isinstance(value, np.ndarray):
+                value.flags.writeable = False
+            self._cache[key] = value
+        return self._cache[key]
+
+    def _angle(self, spec: _Angle, reduced: bool) -> np.ndarray:
         sol, t = self.sol, self.t
         if sol.kind == "steady":
             return spec.start + (mod_two_pi(spec.rate, t) if reduced else spec.rate * t)
@@ -687,7 +699,7 @@ class HeavyTopSolution:
 
             ns = sorted(n for n, n1 in self._mp.get("one_minus_n", {}).items() if n1 >= 1e-3)
             self._mp["pi_series"] = None if not ns or self._period is None else pi_series.fit_pi_series_for_motion(
-                np.array(ns), self.m, self.m1, self._period.hi / 2)
+                np.array(ns), self.m, self.m1, self._period.hi / 2, parameter=self._jacobi_parameter)
         return self._mp["pi_series"]
 
     @functools.cached_property
@@ -721,13 +733,16 @@ class HeavyTopSolution:
         ph, pl = two_prod(j, per.hi)  # exact: j is an integer below 2**53
         pl = pl + j * per.lo
         rh, rl = dd_add(hi, lo, -ph, -pl)
-        # the floor of the rounded hi part can be off by one at a period boundary: correct it
+        # the floor of the rounded hi part can be off by one at a period boundary: correct it (where it is: at
+        # most a few samples, usually none — a correction nowhere needed is not computed)
         for low in (rh < 0, (rh == 0) & (rl < 0)):
-            ah, al = dd_add(rh, rl, per.hi, per.lo)
-            rh, rl, j = np.where(low, ah, rh), np.where(low, al, rl), np.where(low, j - 1, j)
+            if low.any():
+                ah, al = dd_add(rh, rl, per.hi, per.lo)
+                rh, rl, j = np.where(low, ah, rh), np.where(low, al, rl), np.where(low, j - 1, j)
         high = (rh > per.hi) | ((rh == per.hi) & (rl >= per.lo))
-        ah, al = dd_add(rh, rl, -per.hi, -per.lo)
-        rh, rl, j = np.where(high, ah, rh), np.where(high, al, rl), np.where(high, j + 1, j)
+        if high.any():
+            ah, al = dd_add(rh, rl, -per.hi, -per.lo)
+            rh, rl, j = np.where(high, ah, rh), np.where(high, al, rl), np.where(high, j + 1, j)
         return j, rh, rl
 
     # --- one pass over many quantities ---------------------------------------------------------
