@@ -1,6 +1,6 @@
 """The heavy top's closed-form setup in extended precision: one motion without mpmath (issue 15).
 
-:func:`.exact.exact_heavy_top` sets a motion up at 40 digits with mpmath (:func:`.exact._setup`); in a
+:func:`.exact.exact_heavy_top` sets a motion up at 40 digits with mpmath (:func:`._exact_setup.setup`); in a
 warm ``mechderive run`` importing mpmath and the 40-digit setup were most of the solve stage.  Asked with
 the time span to be evaluated (``horizon``), it first builds the same :class:`~.exact.HeavyTopSolution`
 here, from the batched path (:mod:`.batch`) run on a batch of one in ``numpy.longdouble`` (x87 extended
@@ -12,7 +12,7 @@ precision on x86-64, ε = 1.1e-19):
   bottom passage in 1 ∓ u, near figure 44's class boundaries, roots not to 1e-12 — goes to 40 digits;
 * 1 ∓ u_k = (1 ∓ u0) ∓ w_k from the half angle, n₊ = (u2 − u1)/(1 − u1), n₋ = −(u2 − u1)/(1 + u1);
 * the phase's start v0 = F(A0|m), sin²A0 = (u0 − u1)/(u2 − u1) = −w1/(u2 − u1), split at |A0| = π/4 as
-  :func:`.exact._setup` splits it (DLMF 19.7.8), with F(φ|m) = sin φ R_F(cos²φ, cos²φ + (1 − m) sin²φ, 1)
+  :func:`._exact_setup.setup` splits it (DLMF 19.7.8), with F(φ|m) = sin φ R_F(cos²φ, cos²φ + (1 − m) sin²φ, 1)
   (DLMF 19.25.5);
 * on the first request for φ or ψ (:func:`angle_constants`): the partial fractions of φ̇/κ and ψ̇/κ
   (3.74)–(3.75) and the advance per nutation period (c0/κ)·2K + Σ (c_i/κ)·2Π(n_i|m),
