@@ -420,7 +420,7 @@ def test_estimate_grows_with_the_size_of_the_continuous_angles():
 def test_the_written_out_gauss_legendre_rule_is_the_derived_one():
     """The error estimate's panel rule (written out) against its derivation: the eigenvalues of the Jacobi
     matrix (Golub and Welsch 1969), then Newton's method on P_n by the three-term recurrence (DLMF 18.9.1),
-    bit for bit, and at 40 digits: the nodes to an ulp, the weights to 2e-14 relative."""
+    and at 40 digits: the nodes to an ulp, the weights to 2e-14 relative."""
     from mechderive.systems.heavy_top.estimate import _NODES, _gauss_legendre
 
     def recurrence(x):
@@ -440,8 +440,9 @@ def test_the_written_out_gauss_legendre_rule_is_the_derived_one():
             break
     _, dp = recurrence(x)
     nodes, weights = _gauss_legendre()
-    assert nodes.tolist() == x[::-1].tolist()
-    assert weights.tolist() == (2 / ((1 - x[::-1] ** 2) * dp[::-1] ** 2)).tolist()
+    # (to a few ulp, not bit for bit: LAPACK's eigenvalues, Newton's start, may differ by an ulp between builds)
+    assert np.max(np.abs(nodes - x[::-1])) <= 4 * np.spacing(1.0)
+    assert np.max(np.abs(weights / (2 / ((1 - x[::-1] ** 2) * dp[::-1] ** 2)) - 1)) <= 2e-14
     with mpmath.workdps(40):  # the same Newton iteration at 40 digits
         for x0, w0 in zip(nodes.tolist(), weights.tolist()):
             xm = mpmath.mpf(x0)
