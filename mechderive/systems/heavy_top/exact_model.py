@@ -118,7 +118,12 @@ class HeavyTopExactModel(SymbolicModel):
                 moved[i_m], moved[i_k2] = 0, 0
                 moved[R.gens.index(R(p))] = monom[i_m]
             residual += R({tuple(moved): coeff})
-        coeffs = sp.Poly(residual.as_expr(), _x).all_coeffs()
+        # its coefficients of x^k, highest first (what Poly(residual.as_expr(), x).all_coeffs() gives), read off the
+        # ring's terms: building that Poly from the expression was 40% of this derivation
+        i_x, by_power = R.gens.index(R(_x)), {}
+        for monom, coeff in residual.terms():
+            by_power.setdefault(monom[i_x], {})[monom[:i_x] + (0,) + monom[i_x + 1:]] = coeff
+        coeffs = [R(by_power[k]).as_expr() if k in by_power else sp.Integer(0) for k in range(max(by_power, default=0), -1, -1)]
         sol = list(sp.linsolve([c for c in coeffs if c != 0], [k2, p]))
         if len(sol) != 1 or any(v.free_symbols & {k2, p} for v in sol[0]):
             raise DerivationError(f"expected one (κ², κ² m) for the nutation ansatz, got {sol}")
