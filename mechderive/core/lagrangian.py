@@ -79,8 +79,9 @@ def _normal(expr: Any) -> sp.Expr:
 
 
 def _solve_in_field(A: sp.Matrix, rhs: sp.Matrix) -> list | bool | None:
-    """The solution of A x = rhs, each entry as :func:`_normal` gives it; False if A is singular (as a function:
-    det A ≡ 0 modulo sin² + cos² = 1); None if the entries are not rational in sines, cosines and symbols.
+    """The solution of A x = rhs, each entry as :func:`_normal` gives it; False if the elimination meets a zero
+    pivot column or det A ≡ 0 modulo sin² + cos² = 1 (the caller then decides by expressions); None if the entries
+    are not rational in sines, cosines and symbols.
 
     By Gaussian elimination in the field of rational functions of the cosines, sines and symbols
     (:class:`~mechderive.core.simplify.TrigField`): the solution of a regular system over a field is unique, so
@@ -343,12 +344,13 @@ class LagrangianModel(SymbolicModel):
         if A is None or A.has(*unknowns):
             raise DerivationError(f"expected momenta linear in the cyclic velocities {unknowns}, got {eqs}")
         sol = _solve_in_field(A, rhs)
-        if sol is None:  # not rational in sines, cosines and symbols: by expressions
+        if sol is None or sol is False:
+            # not rational in sines, cosines and symbols, or singular in the field's elimination — whose pivots are
+            # nonzero in the field but may vanish as functions (a multiple of sin² + cos² − 1): decided by
+            # expressions, as before, so that only a system singular as a function is refused
             if vanishes(A.det(method="berkowitz")):
                 raise DerivationError(f"expected p_c = ∂L/∂q̇_c solvable for {unknowns}, got a singular system {A}")
             sol = [_normal(x) for x in A.LUsolve(rhs)]
-        elif sol is False:
-            raise DerivationError(f"expected p_c = ∂L/∂q̇_c solvable for {unknowns}, got a singular system {A}")
         return dict(zip(unknowns, sol))
 
     @derived
