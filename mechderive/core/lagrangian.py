@@ -78,10 +78,11 @@ def _normal(expr: Any) -> sp.Expr:
     return sp.factor(trig_normal(expr))
 
 
-def _solve_in_field(A: sp.Matrix, rhs: sp.Matrix) -> list | bool | None:
-    """The solution of A x = rhs, each entry as :func:`_normal` gives it; False if the elimination meets a zero
-    pivot column or det A ≡ 0 modulo sin² + cos² = 1 (the caller then decides by expressions); None if the entries
-    are not rational in sines, cosines and symbols.
+def _solve_in_field(A: sp.Matrix, rhs: sp.Matrix) -> list | None:
+    """The solution of A x = rhs, each entry as :func:`_normal` gives it; None where this route cannot tell: the
+    entries are not rational in sines, cosines and symbols, or the elimination meets a zero pivot column or
+    det A ≡ 0 modulo sin² + cos² = 1 (a pivot nonzero in the field may vanish as a function) — the caller then
+    decides by expressions.
 
     By Gaussian elimination in the field of rational functions of the cosines, sines and symbols
     (:class:`~mechderive.core.simplify.TrigField`): the solution of a regular system over a field is unique, so
@@ -99,7 +100,7 @@ def _solve_in_field(A: sp.Matrix, rhs: sp.Matrix) -> list | bool | None:
     for k in range(n):
         pivot = next((i for i in range(k, n) if rows[i][k] != 0), None)
         if pivot is None:
-            return False
+            return None
         rows[k], rows[pivot] = rows[pivot], rows[k]
         det *= rows[k][k]
         for i in range(k + 1, n):
@@ -107,7 +108,7 @@ def _solve_in_field(A: sp.Matrix, rhs: sp.Matrix) -> list | bool | None:
             if f != 0:
                 rows[i] = [x - f * y for x, y in zip(rows[i], rows[k])]
     if F.normal(det) == 0:  # zero as a function though not in the field (sin² + cos² − 1)
-        return False
+        return None
     x = [F.field.zero] * n
     for k in reversed(range(n)):
         x[k] = (rows[k][n] - sum((rows[k][j] * x[j] for j in range(k + 1, n)), F.field.zero)) / rows[k][k]
@@ -344,10 +345,7 @@ class LagrangianModel(SymbolicModel):
         if A is None or A.has(*unknowns):
             raise DerivationError(f"expected momenta linear in the cyclic velocities {unknowns}, got {eqs}")
         sol = _solve_in_field(A, rhs)
-        if sol is None or sol is False:
-            # not rational in sines, cosines and symbols, or singular in the field's elimination — whose pivots are
-            # nonzero in the field but may vanish as functions (a multiple of sin² + cos² − 1): decided by
-            # expressions, as before, so that only a system singular as a function is refused
+        if sol is None:  # decided by expressions: only a system singular as a function is refused
             if vanishes(A.det(method="berkowitz")):
                 raise DerivationError(f"expected p_c = ∂L/∂q̇_c solvable for {unknowns}, got a singular system {A}")
             sol = [_normal(x) for x in A.LUsolve(rhs)]

@@ -103,8 +103,8 @@ def quarter_period(m1_hi: np.ndarray, m1_lo: np.ndarray) -> tuple[np.ndarray, np
     """K = π/(2 AGM(1, √m1)) in double-double; K = inf where m1 = 0.
 
     A scalar parameter (the usual case: one motion, many times) is computed once per value, and as a scalar: the
-    same arithmetic on NumPy scalars, half the time of an array of one point (the batched closed forms' batch of
-    one, :func:`mechderive.systems.heavy_top.batch._agm_k`).
+    same arithmetic on NumPy scalars, half the time of an array of one point (a batched closed form's batch of
+    one).
     """
     if np.size(m1_hi) == 1 and np.size(m1_lo) == 1:
         shape = np.broadcast(m1_hi, m1_lo).shape
