@@ -214,11 +214,13 @@ def read_file(folder: int, name: str, *, limit: int = MAX_BYTES) -> bytes | None
             return None
         chunks, total = [], 0
         while total <= limit:
-            chunk = os.read(fd, min(1 << 20, limit + 1 - total))
-            if not chunk:
-                break
+            # first a byte more than its size: a file read whole in one call (a regular file's short read is its end)
+            ask = min(1 << 20, limit + 1 - total, st.st_size + 1 if not chunks else 1 << 20)
+            chunk = os.read(fd, ask)
             chunks.append(chunk)
             total += len(chunk)
+            if len(chunk) < ask:
+                break
         return None if total > limit else b"".join(chunks)
     except OSError:
         return None
