@@ -290,6 +290,26 @@ def test_f_e_and_k_against_mpmath(m1):
     assert _max_excess(elliptic_e_incomplete(_PHIS, m, m1=m1_kw), e_ref, INT_RTOL, 0) <= 1.0
 
 
+
+def test_quarter_period_of_one_value_is_the_arrays_bit_for_bit_and_32_digit():
+    """K(m) = π/(2 M(1, √m1)) (DLMF 19.8.5): one value runs the double-double AGM on Python floats, arrays on
+    NumPy — the same IEEE operations, so the same bits; both against mpmath at 40 digits to 2e-31 relative
+    (double-double's ~106 bits, with the AGM's ~6 steps of rounding)."""
+    from mechderive.special import _parameter
+
+    rng = np.random.default_rng(15)
+    m1 = np.concatenate([rng.uniform(0, 1, 60), 10.0 ** rng.uniform(-300, 0, 60), [1.0, 0.5, 2.0**-900, 5e-324]])
+    lo = np.concatenate([m1[:-4] * rng.uniform(-1, 1, len(m1) - 4) * 1e-17, np.zeros(4)])
+    _parameter._quarter_period_scalar.cache_clear()
+    for i in range(len(m1)):
+        # (an array of one: an array's AGM runs to its slowest element's convergence, which can move the last bit)
+        arr_hi, arr_lo = _parameter._quarter_period(m1[i:i + 1], lo[i:i + 1])
+        one_hi, one_lo = _parameter.quarter_period(np.array([m1[i]]), np.array([lo[i]]))
+        assert (one_hi[0], one_lo[0]) == (arr_hi[0], arr_lo[0]), m1[i]
+        with mpmath.workdps(40 + max(0, int(-np.log10(m1[i])))):  # 40 digits of m = 1 - m1 past m1's own
+            ref = mpmath.ellipk(1 - (mpmath.mpf(float(m1[i])) + mpmath.mpf(float(lo[i]))))
+            assert abs((mpmath.mpf(float(one_hi[0])) + mpmath.mpf(float(one_lo[0]))) / ref - 1) < 2e-31, m1[i]
+
 @pytest.mark.parametrize("m1", M1_GRID[:-1])
 @pytest.mark.parametrize("n", N_GRID)
 def test_pi_against_mpmath(m1, n):

@@ -14,6 +14,8 @@ splitting, since NumPy has no fused multiply-add).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 __all__ = ["two_sum", "two_prod", "dd_add", "dd_mul", "dd_div", "dd_sqrt", "PI_HI", "PI_LO"]
@@ -42,8 +44,8 @@ def _fast_two_sum(a, b):
 
 def _split(a):
     """Veltkamp split a = hi + lo, each with <= 26 significant bits."""
-    big = np.abs(a) > _BIG
-    if big.any():  # (the method, not np.any's wrapper: every TwoProduct splits twice)
+    big = abs(a) > _BIG
+    if big if isinstance(big, bool) else big.any():  # (the method, not np.any's wrapper: every TwoProduct splits twice)
         a_s = np.where(big, a * 2.0**-54, a)
         hi, lo = _split(a_s)
         scale = np.where(big, 2.0**54, 1.0)
@@ -94,6 +96,8 @@ def dd_div(ah, al, bh, bl):
 
 def dd_sqrt(ah, al):
     """√(ah + al) in double-double for ah >= 0 (one Newton correction; tiny inputs rescaled)."""
+    if type(ah) is float and type(al) is float:
+        return _dd_sqrt_float(ah, al)
     ah = np.asarray(ah, dtype=float)
     small = (ah < 2.0**-900) & (ah > 0)
     scale_in = np.where(small, 2.0**200, 1.0)
@@ -105,3 +109,16 @@ def dd_sqrt(ah, al):
         corr = np.where(s > 0, ((ah - p) - e + al) / (2.0 * s), 0.0)
     hi, lo = _fast_two_sum(s, corr)
     return hi * scale_out, lo * scale_out
+
+
+def _dd_sqrt_float(ah: float, al: float) -> tuple[float, float]:
+    """:func:`dd_sqrt` on Python floats, step for step (the same IEEE operations, so the same bits; NaN for ah < 0
+    as np.sqrt gives): the scalar AGM of the quarter period runs on floats."""
+    small = 0.0 < ah < 2.0**-900
+    if small:
+        ah, al = ah * 2.0**200, al * 2.0**200
+    s = math.sqrt(ah) if ah >= 0 else math.nan
+    p, e = two_prod(s, s)
+    corr = ((ah - p) - e + al) / (2.0 * s) if s > 0 else 0.0
+    hi, lo = _fast_two_sum(s, corr)
+    return (hi * 2.0**-100, lo * 2.0**-100) if small else (hi, lo)
