@@ -11,7 +11,7 @@ import numpy as np
 
 from ..errors import NonFiniteValueError, NotARotationError, ShapeError, InvalidInputError
 
-__all__ = ["as_finite_array", "check_rotation_matrix", "check_positive"]
+__all__ = ["as_finite_array", "check_rotation_matrix", "check_positive", "every", "some"]
 
 
 def as_finite_array(value: Any, name: str, *, shape: tuple[int | None, ...] | None = None) -> np.ndarray:
@@ -28,10 +28,29 @@ def as_finite_array(value: Any, name: str, *, shape: tuple[int | None, ...] | No
         if arr.ndim != len(shape) or any(s is not None and s != n for s, n in zip(shape, arr.shape)):
             want = "(" + ", ".join("N" if s is None else str(s) for s in shape) + ("," if len(shape) == 1 else "") + ")"
             raise ShapeError(f"expected `{name}` to have shape {want}, got {arr.shape}")
-    if not np.all(np.isfinite(arr)):
+    if not every(np.isfinite(arr)):
         bad = arr[~np.isfinite(arr)].ravel()[0]
         raise NonFiniteValueError(f"expected `{name}` to be finite, got {bad} in it")
     return arr
+
+
+def every(mask: Any) -> bool:
+    """Whether every element of the boolean ``mask`` (an array, a NumPy or Python bool) is true.
+
+    ``mask.all()`` goes through NumPy's Python-level reduction (~5k instructions); a mask of one element (a
+    closed form's batch of one, a scalar parameter) is read directly: the loops of the elliptic integrals and
+    functions test one at every step.
+    """
+    if type(mask) is bool:
+        return mask
+    return bool(mask) if mask.size == 1 else bool(mask.all())
+
+
+def some(mask: Any) -> bool:
+    """Whether some element of the boolean ``mask`` is true (see :func:`every`)."""
+    if type(mask) is bool:
+        return mask
+    return bool(mask) if mask.size == 1 else bool(mask.any())
 
 
 def check_positive(value: float, name: str) -> float:

@@ -29,6 +29,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..core.validate import every, some
+
 __all__ = ["elliprc", "elliprd", "elliprf", "elliprj"]
 
 _MAX_STEPS = 64  # each step quarters Q / |A|: 64 steps reach 4⁻⁶⁴ ≈ 3e-39
@@ -61,7 +63,7 @@ def elliprf(x, y, z):
     scale = 1.0  # 4⁻ⁿ, exact
     with np.errstate(all="ignore"):
         for _ in range(_MAX_STEPS):
-            if (scale * Q < xyzA[3]).all():  # (A > 0 in the domain: |A| is A; a NaN stops neither)
+            if every(scale * Q < xyzA[3]):  # (A > 0 in the domain: |A| is A; a NaN stops neither)
                 break
             s = np.sqrt(xyzA[:3])
             sx, sy, sz = s
@@ -87,7 +89,7 @@ def elliprc(x, y):
     scale = np.ones_like(A)
     with np.errstate(all="ignore"):
         for _ in range(_MAX_STEPS):
-            if (scale * Q < np.abs(A)).all():
+            if every(scale * Q < np.abs(A)):
                 break
             lam = 2 * np.sqrt(x) * np.sqrt(y) + y
             x, y, A = (x + lam) / 4, (y + lam) / 4, (A + lam) / 4
@@ -108,16 +110,16 @@ def _rc_one(e):
     if e.dtype != np.longdouble and e.dtype != np.float64:
         e = e.astype(float)
     small = np.abs(e) < 1e-3
-    if small.all():
+    if every(small):
         return _rc_one_series(e)
     # (the series only where some point needs it: R_J's first steps have every |e| large)
-    series = _rc_one_series(e) if small.any() else None
+    series = _rc_one_series(e) if some(small) else None
     with np.errstate(all="ignore"):
         r = np.sqrt(np.abs(e))
         positive = e > 0
-        if (positive | small).all():
+        if every(positive | small):
             closed = np.arctan(r) / r
-        elif (~positive | small).all():
+        elif every(~positive | small):
             closed = np.arctanh(r) / r
         else:
             closed = np.where(positive, np.arctan(r), np.arctanh(r)) / r
@@ -147,7 +149,7 @@ def _rj_positive(x, y, z, p):
     total = 0.0
     with np.errstate(all="ignore"):
         for _ in range(_MAX_STEPS):
-            if (scale * Q < A).all():  # (A > 0 for p > 0: |A| is A)
+            if every(scale * Q < A):  # (A > 0 for p > 0: |A| is A)
                 break
             sx, sy, sz, sp = np.sqrt(x), np.sqrt(y), np.sqrt(z), np.sqrt(p)
             lam = sx * sy + sx * sz + sy * sz
@@ -173,7 +175,7 @@ def _rj_positive(x, y, z, p):
 
 def elliprj(x, y, z, p):
     """R_J(x, y, z, p) (DLMF 19.16.2); for p < 0 the Cauchy principal value (DLMF 19.20.14)."""
-    if not np.any(np.asarray(p) < 0):
+    if not some(np.asarray(p) < 0):
         return _rj_positive(x, y, z, p)
     x, y, z, p = _as_float(x, y, z, p)
     neg = p < 0

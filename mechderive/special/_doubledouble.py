@@ -1,4 +1,4 @@
-"""Double-double arithmetic on NumPy arrays (private).
+"""Double-double arithmetic on NumPy arrays, or on Python floats for one value (private).
 
 A double-double number is an unevaluated sum ``hi + lo`` of two float64 with
 ``|lo| <= ulp(hi)/2``; it carries about 106 bits.  Only what the elliptic
@@ -17,6 +17,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
+
+from ..core.validate import some
 
 __all__ = ["two_sum", "two_prod", "dd_add", "dd_mul", "dd_div", "dd_sqrt", "PI_HI", "PI_LO"]
 
@@ -45,7 +47,7 @@ def _fast_two_sum(a, b):
 def _split(a):
     """Veltkamp split a = hi + lo, each with <= 26 significant bits."""
     big = abs(a) > _BIG
-    if big if isinstance(big, bool) else big.any():  # (the method, not np.any's wrapper: every TwoProduct splits twice)
+    if some(big):  # (not np.any's wrapper: every TwoProduct splits twice)
         a_s = np.where(big, a * 2.0**-54, a)
         hi, lo = _split(a_s)
         scale = np.where(big, 2.0**54, 1.0)

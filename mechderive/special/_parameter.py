@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from ..core.validate import as_finite_array
+from ..core.validate import as_finite_array, every
 from ..errors import InvalidInputError
 from ._doubledouble import PI_HI, PI_LO, dd_add, dd_div, dd_mul, dd_sqrt, two_prod, two_sum
 
@@ -139,8 +139,7 @@ def _agm_quarter_period(m1_hi: Any, m1_lo: Any, one: Any, zero: Any) -> tuple[An
     ah, al = one, zero
     for _ in range(64):
         dh, dl = dd_add(ah, al, -bh, -bl)
-        done = abs(dh) <= 1e-17 * ah
-        if done if isinstance(done, bool) else done.all():
+        if every(abs(dh) <= 1e-17 * ah):
             break
         nh, nl = dd_add(ah, al, bh, bl)
         ph, pl = dd_mul(ah, al, bh, bl)

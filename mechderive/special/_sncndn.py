@@ -25,6 +25,7 @@ import functools
 
 import numpy as np
 
+from ..core.validate import every, some
 from ..errors import InvalidInputError
 from ._doubledouble import PI_HI, PI_LO, dd_div, two_prod, two_sum
 from ._parameter import Parameter, quarter_period, reduce_by_half_periods
@@ -57,7 +58,7 @@ def _agm_levels(m1: np.ndarray):
         c = np.where(done, c, c_new)
         n_levels = np.where(done, n_levels, level)
         done = done | (np.abs(a - b) <= _AGM_TOL * a)
-        if done.all():
+        if every(done):
             break
         emc = np.where(done, emc, a * b)
         a = np.where(done, a, c_new)
@@ -87,7 +88,7 @@ def _sncndn_small(v: np.ndarray, v_lo: np.ndarray, m: np.ndarray, levels, g_hi, 
         dn_new = (b_levels[i] + a_new) / (b + a_new)
         a_new = c_new / b
         active = i < n_levels
-        if active.all():
+        if every(active):
             a, c, dn = a_new, c_new, dn_new
         else:
             a, c, dn = np.where(active, a_new, a), np.where(active, c_new, c), np.where(active, dn_new, dn)
@@ -165,7 +166,7 @@ def _per_parameter_arrays(p: Parameter) -> dict:
     g_hi, g_lo = dd_div(PI_HI, PI_LO, 2.0 * K_hi, 2.0 * K_lo)          # π/(2K) = AGM(1, k')
     out = dict(one=one, K_hi=K_hi, K_lo=K_lo, g_hi=g_hi, g_lo=g_lo, kc=np.sqrt(p.m1 + p.m1_lo),
                levels=_agm_levels(np.where(one, 1.0, p.m1)), hyperbolic=(p.m1 < _SECH_SERIES_BELOW) & ~one)
-    if np.any(out["hyperbolic"]):
+    if some(out["hyperbolic"]):
         m_hi, m_lo = two_sum(1.0, -p.m1)
         m_lo = m_lo - p.m1_lo
         Kp_hi, Kp_lo = quarter_period(m_hi, m_lo)                        # K' = K(m1)
@@ -190,7 +191,7 @@ def reduced_sn_cn_dn(u: np.ndarray, p: Parameter):
     m = p.m
     one, K_hi, K_lo = q["one"], q["K_hi"], q["K_lo"]
     too_big = (np.abs(u) > _MAX_PERIODS * K_hi) & ~one
-    if too_big.any():
+    if some(too_big):
         i = np.flatnonzero(too_big.ravel())[0]
         raise InvalidInputError(
             f"expected |u| <= 2**52·K(m) = {_MAX_PERIODS * np.broadcast_to(K_hi, shape).ravel()[i]:.6g} (beyond it "
@@ -207,9 +208,9 @@ def reduced_sn_cn_dn(u: np.ndarray, p: Parameter):
     v_hi, v_lo = vsign * v_hi, vsign * v_lo
     S, C, D = _sncndn_small(v_hi, v_lo, m, q["levels"], q["g_hi"], q["g_lo"])
     hyperbolic = q["hyperbolic"]
-    if hyperbolic.all():
+    if every(hyperbolic):
         C, D = _cn_dn_sech_series(v_hi, v_lo, K_hi, *q["gp"], q["k"], q["n_terms"])
-    elif hyperbolic.any():
+    elif some(hyperbolic):
         sel = np.broadcast_to(hyperbolic, shape)
         gp_hi, gp_lo, k, K_sel = (np.broadcast_to(x, shape)[sel] for x in (*q["gp"], q["k"], K_hi))
         C_h, D_h = _cn_dn_sech_series(v_hi[sel], v_lo[sel], K_sel, gp_hi, gp_lo, k, q["n_terms"])
@@ -220,7 +221,7 @@ def reduced_sn_cn_dn(u: np.ndarray, p: Parameter):
     sn_a = np.where(flip, C / D, S)
     cn_a = np.where(flip, kc * S / D, C)
     dn_a = np.where(flip, kc / D, D)
-    if one.any():                        # m = 1 exactly: tanh, sech, sech
+    if some(one):                        # m = 1 exactly: tanh, sech, sech
         e = np.exp(-2.0 * np.abs(u))
         sech = 2.0 * np.sqrt(e) / (1.0 + e)
         sn_a = np.where(one, np.tanh(np.abs(u)), sn_a)
