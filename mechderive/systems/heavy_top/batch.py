@@ -262,6 +262,11 @@ def _twice(x: np.ndarray) -> np.ndarray:
     return np.concatenate([x, x])
 
 
+def _thrice(x: np.ndarray) -> np.ndarray:
+    """The points of ``x`` three times over, as :func:`_tier` stacks a motion with its two moved ones."""
+    return np.concatenate([x, x, x])
+
+
 def _agm_k(m1: np.ndarray) -> np.ndarray:
     """K(m) by the arithmetic-geometric mean in double-double (:func:`mechderive.special._parameter.quarter_period`,
     DLMF 19.8.5), from 1 − m split into two doubles: the second, independent evaluation of K, in ``m1``'s dtype."""
@@ -338,29 +343,34 @@ def _tier(P: list[np.ndarray], S: list[np.ndarray], names: tuple[str, ...], dtyp
         u0 = np.cos(S[0])
         w, last_step = _roots(c, -d_bottom, -d_pole)
         want_advance = any(k in names for k in ("mean_precession_rate", "precession_per_nutation"))
-        base = _pipeline(F, P, a, beta, shift, w, want_advance)
+        values_only = keep is not None and keep.get("values_only")
+        if not values_only:
+            # f's rounding noise at each root, from the sizes of its coefficients' terms (8ε each); f shifted up and
+            # down by the noise at the turning points widens and narrows the motion, u1, u2 and u3 consistently
+            absw = np.abs(w)
+            noise = 8 * eps * (((sizes[0][:, None] * absw + sizes[1][:, None]) * absw + sizes[2][:, None]) * absw
+                               + sizes[3][:, None])
+            slope = np.abs((3 * c[0][:, None] * w + 2 * c[1][:, None]) * w + c[2][:, None])
+            near = np.maximum(noise[:, 0], noise[:, 1])
+            # the two moved motions, then with the roots themselves, as one batch of 2n and one of 3n: each element's
+            # arithmetic is as in separate batches, in a third of the calls (the calls are the cost of a batch of one,
+            # the single-point closed form).  (Carlson's loops run to the batch's slowest point, as they do for any
+            # batch: the moved motions are within the roots' rounding of the motion itself.)
+            both = _newton([_twice(c[0]), _twice(c[1]), _twice(c[2]), np.concatenate([c[3] + near, c[3] - near])],
+                           _twice(w))[0]
+            moved = [both[:n], both[n:]]
+            dw = (np.max([np.abs(x - w) for x in moved], axis=0) + noise / slope + 2 * last_step).astype(float)
+            amp = (w[:, 1] - w[:, 0]).astype(float)
+            stacked = _pipeline(F, [_thrice(x) for x in P[:2]], _thrice(a), _thrice(beta), [_thrice(x) for x in shift],
+                              np.concatenate([w, both]), want_advance)
+            base, *others = ({k: v[i * n:(i + 1) * n] for k, v in stacked.items()} for i in range(3))
+        else:
+            base = _pipeline(F, P, a, beta, shift, w, want_advance)
         if keep is not None:
             keep.update(a=a, b=b, alpha=alpha, beta=beta, w=w, u0=u0, rate0=rate0, d_bottom=d_bottom, d_pole=d_pole,
                         **{k: base[k] for k in ("kappa", "m", "m1", "K", "T")})
-            if keep.get("values_only"):  # the same values in another precision, to compare with: no estimates
+            if values_only:  # the same values in another precision, to compare with: no estimates
                 return values, errors, np.zeros(n, dtype=bool)
-        # f's rounding noise at each root, from the sizes of its coefficients' terms (8ε each); f shifted up and
-        # down by the noise at the turning points widens and narrows the motion, u1, u2 and u3 consistently
-        absw = np.abs(w)
-        noise = 8 * eps * (((sizes[0][:, None] * absw + sizes[1][:, None]) * absw + sizes[2][:, None]) * absw
-                           + sizes[3][:, None])
-        slope = np.abs((3 * c[0][:, None] * w + 2 * c[1][:, None]) * w + c[2][:, None])
-        near = np.maximum(noise[:, 0], noise[:, 1])
-        # the two moved motions as one batch of 2n (f + noise, then f − noise): each element's arithmetic is the
-        # same as in two batches, in half the calls — the cost of a batch of one (the single-point closed form)
-        both = _newton([_twice(c[0]), _twice(c[1]), _twice(c[2]), np.concatenate([c[3] + near, c[3] - near])],
-                       _twice(w))[0]
-        moved = [both[:n], both[n:]]
-        dw = (np.max([np.abs(x - w) for x in moved], axis=0) + noise / slope + 2 * last_step).astype(float)
-        amp = (w[:, 1] - w[:, 0]).astype(float)
-        stacked = _pipeline(F, [_twice(x) for x in P[:2]], _twice(a), _twice(beta), [_twice(x) for x in shift], both,
-                            want_advance)
-        others = [{k: v[:n] for k, v in stacked.items()}, {k: v[n:] for k, v in stacked.items()}]
 
         def propagated(key: str) -> np.ndarray:
             return np.max([np.abs(o[key] - base[key]) for o in others], axis=0).astype(float)
