@@ -21,7 +21,7 @@ from sympy.polys.polyerrors import BasePolynomialError
 from ..errors import InvalidInputError
 from .symbols import as_symbolic
 
-__all__ = ["trig_normal", "is_zero", "simplify_trig", "TrigField", "is_zero_rational", "as_fraction"]
+__all__ = ["trig_normal", "is_zero", "simplify_trig", "TrigField", "is_zero_rational", "as_fraction", "factor"]
 
 
 def _trig_symbols(expr: sp.Expr) -> tuple[sp.Expr, dict, dict, list]:
@@ -223,3 +223,99 @@ def simplify_trig(expr: Any) -> sp.Expr:
         return normal
     nice = sp.trigsimp(sp.factor_terms(normal))
     return nice if sp.count_ops(nice) <= sp.count_ops(normal) else normal
+
+
+def _linear_coprime(poly: Any) -> bool:
+    """Whether a primitive polynomial over ZZ is proven irreducible by being of degree 1 in some generator x:
+    p = a x + b with gcd(a, b) = 1 (a factorisation p = q r has one factor free of x, which divides a and b).
+    False means only "not proven so"."""
+    terms = poly.terms()
+    for i in range(len(poly.gens)):
+        if max(m[i] for m, _ in terms) != 1:
+            continue
+        a = {m[:i] + (0,) + m[i + 1:]: c for m, c in terms if m[i] == 1}
+        b = {m: c for m, c in terms if m[i] == 0}
+        if not b:  # p = a x: irreducible iff a is a unit
+            return len(a) == 1 and not any(next(iter(a))) and abs(next(iter(a.values()))) == 1
+        if len(a) == 1:  # a monomial c·m: coprime to b iff each of m's generators is missing from a term of b (the
+            # integer c is coprime to b's content, p being primitive)
+            (ma,) = a
+            return all(any(mb[j] == 0 for mb in b) for j, e in enumerate(ma) if e)
+        pa = sp.Poly.from_dict(a, *poly.gens, domain=poly.domain)
+        pb = sp.Poly.from_dict(b, *poly.gens, domain=poly.domain)
+        return pa.gcd(pb).is_one
+    return False
+
+
+def _factor_list(poly: Any) -> tuple:
+    """``poly.factor_list()``, from the square-free decomposition where each of its factors is proven irreducible
+    (:func:`_linear_coprime`): then the two coincide over ZZ (both split off the integer content with the sign
+    that makes the leading coefficient positive).  SymPy's multivariate factoriser (Wang's algorithm) spends most
+    of its time proving small polynomials irreducible; the square-free decomposition is a few gcds."""
+    if poly.domain.is_ZZ:
+        coeff, factors = poly.sqf_list()
+        if all(_linear_coprime(f) for f, _ in factors):
+            return coeff, factors
+    return poly.factor_list()
+
+
+def factor(expr: Any) -> sp.Expr:
+    """``sympy.factor(expr)``, the same expression, with irreducibility proven cheaply where it can be.
+
+    The assembly is SymPy's own (``_symbolic_factor``, ``_symbolic_factor_list`` of :mod:`sympy.polys.polytools`,
+    method ``"factor"``), each polynomial's factor list by :func:`_factor_list`; anything else (a non-commutative
+    or non-polynomial argument, an older SymPy without these helpers) goes to :func:`sympy.factor`.
+    """
+    try:
+        from sympy.core.mul import _keep_coeff
+        from sympy.polys import polyoptions
+        from sympy.polys.polytools import _factors_product, _poly_from_expr
+        from sympy.polys.polyerrors import PolificationFailed
+        from sympy.polys.rationaltools import together
+        from sympy.core.evalf import pure_complex
+    except ImportError:  # pragma: no cover - a SymPy without them
+        return sp.factor(expr)
+    expr = as_symbolic(expr)
+    if not isinstance(expr, sp.Expr) or not expr.is_commutative or hasattr(expr, "_eval_factor"):
+        return sp.factor(expr)
+    opt = polyoptions.build_options((), {})
+    opt["fraction"] = True
+    coeff, factors = sp.S.One, []
+    for arg in sp.Mul.make_args(together(expr, fraction=True)):
+        if hasattr(arg, "_eval_factor"):
+            return sp.factor(expr)
+        if arg.is_Number or pure_complex(arg):
+            coeff *= arg
+            continue
+        if arg.is_Pow and arg.base != sp.S.Exp1:
+            base, exp = arg.args
+            if base.is_Number and exp.is_Number:
+                coeff *= arg
+                continue
+            if base.is_Number:
+                factors.append((base, exp))
+                continue
+        else:
+            base, exp = arg, sp.S.One
+        try:
+            poly, _ = _poly_from_expr(base, opt)
+        except PolificationFailed as exc:
+            factors.append((exc.expr, exp))
+            continue
+        except BasePolynomialError:  # pragma: no cover - as SymPy would: by SymPy
+            return sp.factor(expr)
+        c, fs = _factor_list(poly)
+        if c is not sp.S.One:
+            if not exp.is_Integer:  # (SymPy's further cases: not met here)
+                return sp.factor(expr)
+            coeff *= c**exp
+        if exp is sp.S.One:
+            factors.extend(fs)
+        elif exp.is_integer:
+            factors.extend([(f, k * exp) for f, k in fs])
+        else:
+            return sp.factor(expr)
+    collected: dict = {}
+    for k, v in factors:
+        collected[k] = collected.get(k, 0) + v
+    return _keep_coeff(coeff, _factors_product(list(collected.items())))
