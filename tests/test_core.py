@@ -222,9 +222,14 @@ def test_dependency_versions_match_importlib_metadata():
         assert _version(dist) == version(dist)
 
 
+def phi_dot_sq_form(x, y, th):
+    return x**2 * sp.cos(th) ** 2 - x**2 - y**2
+
+
 def test_factor_is_sympys_factor_expression_for_expression():
     """core.simplify.factor skips Wang's irreducibility proofs where a polynomial is linear in a generator with
-    coprime coefficients: its result must be sympy.factor's, srepr for srepr, whether or not that shortcut applies."""
+    coprime coefficients, or quadratic in one with a discriminant that is no square: its result must be
+    sympy.factor's, srepr for srepr, whether or not a shortcut applies."""
     x, y, z = sp.symbols("x y z")
     a, b = sp.symbols("a b", positive=True)
     th = sp.Symbol("theta", real=True)
@@ -237,6 +242,9 @@ def test_factor_is_sympys_factor_expression_for_expression():
         x**2 + y**2 + z,  # linear in z, a = 1: irreducible
         sp.Rational(3, 4) * x - sp.Rational(1, 2) * y,  # rational coefficients: SymPy's route over QQ
         x * sp.cos(th) + y * sp.sin(th) - a * b,
+        -phi_dot_sq_form(x, y, th),  # quadratic in y, discriminant not a square: the second shortcut
+        x**2 + y**2, x**2 - y**2, 4 * x**2 - 9, x**2 - 2, (x + y) ** 2 * z**2,  # squares and non-squares
+        x**2 * z + x * y + a * b - 1, (x * z + y) * (x * y + z),
         sp.sqrt(2) * x + y,  # an algebraic coefficient: SymPy's route
         sp.Integer(0), sp.Integer(5), x,
     ]

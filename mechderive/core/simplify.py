@@ -247,14 +247,45 @@ def _linear_coprime(poly: Any) -> bool:
     return False
 
 
+def _quadratic_prime(poly: Any) -> bool:
+    """Whether a primitive polynomial over ZZ is proven irreducible by being of degree 2 in some generator x:
+    p = a x² + b x + c with gcd(a, b, c) = 1 (no factor free of x) factors only into two factors of degree 1 in
+    x, i.e. has a root in the fraction field, iff its discriminant b² − 4ac is a square there — and so in the
+    ring, a UFD (integrally closed).  It is a square iff its square-free decomposition has a square integer
+    content and no part of odd multiplicity.  False means only "not proven so"."""
+    terms = poly.terms()
+    for i in range(len(poly.gens)):
+        if max(m[i] for m, _ in terms) != 2:
+            continue
+        parts = [{m[:i] + (0,) + m[i + 1:]: c for m, c in terms if m[i] == k} for k in (2, 1, 0)]
+        a, b, c = (sp.Poly.from_dict(d, *poly.gens, domain=poly.domain) if d else sp.Poly(0, *poly.gens, domain=poly.domain)
+                   for d in parts)
+        if not (a.is_ground and abs(a.LC()) == 1) and not a.gcd(b).gcd(c).is_one:
+            continue
+        disc = b**2 - 4 * a * c
+        if disc.is_zero:
+            return False
+        content, factors = disc.sqf_list()
+        square = content > 0 and sp.sqrt(content).is_Integer and all(k % 2 == 0 for _, k in factors)
+        return not square
+    return False
+
+
 def _factor_list(poly: Any) -> tuple:
-    """``poly.factor_list()``, from the square-free decomposition where each of its factors is proven irreducible
-    (:func:`_linear_coprime`): then the two coincide over ZZ (both split off the integer content with the sign
-    that makes the leading coefficient positive).  SymPy's multivariate factoriser (Wang's algorithm) spends most
-    of its time proving small polynomials irreducible; the square-free decomposition is a few gcds."""
-    if poly.domain.is_ZZ:
+    """``poly.factor_list()``, without factorising where the polynomial's primitive part, or else each part of its
+    square-free decomposition, is proven irreducible (:func:`_linear_coprime`, :func:`_quadratic_prime`): then the
+    two coincide over ZZ (both split off the integer content with the sign that makes the leading coefficient
+    positive).  SymPy's multivariate factoriser (Wang's algorithm) spends most of its time proving small
+    polynomials irreducible (most of the heavy top's coefficients are); the tests here are a few gcds."""
+    if poly.domain.is_ZZ and not poly.is_ground:
+        # the polynomial itself, first: most met here are irreducible, and then no gcd is needed at all
+        content, primitive = poly.primitive()
+        if primitive.LC() < 0:
+            content, primitive = -content, -primitive
+        if _linear_coprime(primitive) or _quadratic_prime(primitive):
+            return content, [(primitive, 1)]
         coeff, factors = poly.sqf_list()
-        if all(_linear_coprime(f) for f, _ in factors):
+        if all(_linear_coprime(f) or _quadratic_prime(f) for f, _ in factors):
             return coeff, factors
     return poly.factor_list()
 
@@ -267,12 +298,12 @@ def factor(expr: Any) -> sp.Expr:
     or non-polynomial argument, an older SymPy without these helpers) goes to :func:`sympy.factor`.
     """
     try:
+        from sympy.core.evalf import pure_complex
         from sympy.core.mul import _keep_coeff
         from sympy.polys import polyoptions
-        from sympy.polys.polytools import _factors_product, _poly_from_expr
         from sympy.polys.polyerrors import PolificationFailed
+        from sympy.polys.polytools import _factors_product, _poly_from_expr
         from sympy.polys.rationaltools import together
-        from sympy.core.evalf import pure_complex
     except ImportError:  # pragma: no cover - a SymPy without them
         return sp.factor(expr)
     expr = as_symbolic(expr)
