@@ -245,6 +245,8 @@ def test_factor_is_sympys_factor_expression_for_expression():
         -phi_dot_sq_form(x, y, th),  # quadratic in y, discriminant not a square: the second shortcut
         x**2 + y**2, x**2 - y**2, 4 * x**2 - 9, x**2 - 2, (x + y) ** 2 * z**2,  # squares and non-squares
         x**2 * z + x * y + a * b - 1, (x * z + y) * (x * y + z),
+        sp.expand((x**2 - 1) * (a * y - b * z)), sp.expand((a - b) * (y - z) * (y + z) ** 2),  # linear with a
+        sp.expand(3 * (x - y) * (2 * x + y) * (z - 1)), sp.expand(-(x**2 + y**2) * (x * z - 2)),  # common factor
         sp.sqrt(2) * x + y,  # an algebraic coefficient: SymPy's route
         sp.Integer(0), sp.Integer(5), x,
     ]

@@ -225,26 +225,32 @@ def simplify_trig(expr: Any) -> sp.Expr:
     return nice if sp.count_ops(nice) <= sp.count_ops(normal) else normal
 
 
-def _linear_coprime(poly: Any) -> bool:
-    """Whether a primitive polynomial over ZZ is proven irreducible by being of degree 1 in some generator x:
-    p = a x + b with gcd(a, b) = 1 (a factorisation p = q r has one factor free of x, which divides a and b).
-    False means only "not proven so"."""
+def _linear_split(poly: Any) -> tuple | None:
+    """(g, q) with ``poly`` = g q, for a primitive polynomial over ZZ of degree 1 in some generator x: p = a x + b,
+    g = gcd(a, b) (free of x) and q = p / g, which is irreducible (of degree 1 in x with coprime coefficients: a
+    factorisation of q has one factor free of x, which divides both).  None where no generator has degree 1."""
     terms = poly.terms()
     for i in range(len(poly.gens)):
         if max(m[i] for m, _ in terms) != 1:
             continue
         a = {m[:i] + (0,) + m[i + 1:]: c for m, c in terms if m[i] == 1}
         b = {m: c for m, c in terms if m[i] == 0}
-        if not b:  # p = a x: irreducible iff a is a unit
-            return len(a) == 1 and not any(next(iter(a))) and abs(next(iter(a.values()))) == 1
-        if len(a) == 1:  # a monomial c·m: coprime to b iff each of m's generators is missing from a term of b (the
-            # integer c is coprime to b's content, p being primitive)
+        if b and len(a) == 1:  # a monomial c·m: coprime to b iff each of m's generators is missing from a term of b
+            # (the integer c is coprime to b's content, p being primitive)
             (ma,) = a
-            return all(any(mb[j] == 0 for mb in b) for j, e in enumerate(ma) if e)
+            if all(any(mb[j] == 0 for mb in b) for j, e in enumerate(ma) if e):
+                return sp.Poly(1, *poly.gens, domain=poly.domain), poly
         pa = sp.Poly.from_dict(a, *poly.gens, domain=poly.domain)
-        pb = sp.Poly.from_dict(b, *poly.gens, domain=poly.domain)
-        return pa.gcd(pb).is_one
-    return False
+        g = pa.gcd(sp.Poly.from_dict(b, *poly.gens, domain=poly.domain)) if b else pa
+        return g, poly.exquo(g)
+    return None
+
+
+def _linear_coprime(poly: Any) -> bool:
+    """Whether a primitive polynomial over ZZ is proven irreducible by :func:`_linear_split` (g = 1); False means
+    only "not proven so"."""
+    split = _linear_split(poly)
+    return split is not None and split[0].is_one
 
 
 def _quadratic_prime(poly: Any) -> bool:
@@ -282,7 +288,20 @@ def _factor_list(poly: Any) -> tuple:
         content, primitive = poly.primitive()
         if primitive.LC() < 0:
             content, primitive = -content, -primitive
-        if _linear_coprime(primitive) or _quadratic_prime(primitive):
+        split = _linear_split(primitive)
+        if split is not None:
+            # p = g q with q irreducible and g free of q's linear generator: g factorised in turn (a smaller
+            # polynomial, often a product of a few linear ones); the factorisation is unique up to the sign each
+            # factor is normalised by (positive leading coefficient), so this is factor_list's
+            g, q = split
+            if g.is_one:
+                return content, [(primitive, 1)]
+            g_content, g_factors = _factor_list(g)
+            q_content, q = q.primitive()
+            if q.LC() < 0:
+                q_content, q = -q_content, -q
+            return content * g_content * q_content, [*g_factors, (q, 1)]
+        if _quadratic_prime(primitive):
             return content, [(primitive, 1)]
         coeff, factors = poly.sqf_list()
         if all(_linear_coprime(f) or _quadratic_prime(f) for f, _ in factors):
