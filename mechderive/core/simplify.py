@@ -282,7 +282,7 @@ def _factor_list(poly: Any) -> tuple:
     square-free decomposition, is proven irreducible (:func:`_linear_coprime`, :func:`_quadratic_prime`): then the
     two coincide over ZZ (both split off the integer content with the sign that makes the leading coefficient
     positive).  SymPy's multivariate factoriser (Wang's algorithm) spends most of its time proving small
-    polynomials irreducible (most of the heavy top's coefficients are); the tests here are a few gcds."""
+    polynomials irreducible (most of a derivation's coefficients are); the tests here are a few gcds."""
     if poly.domain.is_ZZ and not poly.is_ground:
         # the polynomial itself, first: most met here are irreducible, and then no gcd is needed at all
         content, primitive = poly.primitive()
