@@ -247,6 +247,8 @@ def test_factor_is_sympys_factor_expression_for_expression():
         x**2 * z + x * y + a * b - 1, (x * z + y) * (x * y + z),
         sp.expand((x**2 - 1) * (a * y - b * z)), sp.expand((a - b) * (y - z) * (y + z) ** 2),  # linear with a
         sp.expand(3 * (x - y) * (2 * x + y) * (z - 1)), sp.expand(-(x**2 + y**2) * (x * z - 2)),  # common factor
+        2 * x * y + 2 * x * z, (a * x + a * y) / (b * z - b), -x * y**2 / (2 * x * y - 4 * y),  # sums with common
+        x / y + z, (x + 1 / y) * (x - y) / 3, sp.Rational(1, 2) * (x + y) ** 2 / z,  # factors, denominators in sums
         sp.sqrt(2) * x + y,  # an algebraic coefficient: SymPy's route
         sp.Integer(0), sp.Integer(5), x,
     ]

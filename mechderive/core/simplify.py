@@ -331,7 +331,12 @@ def factor(expr: Any) -> sp.Expr:
     opt = polyoptions.build_options((), {})
     opt["fraction"] = True
     coeff, factors = sp.S.One, []
-    for arg in sp.Mul.make_args(together(expr, fraction=True)):
+    # SymPy first puts the expression over a common denominator (together), whose gcd_terms also pulls common
+    # factors out of sums: where no sum has a denominator in it there is nothing to combine, and what it pulls out
+    # is found by the factorisation anyway (the result depends only on the irreducible factors, unique up to the
+    # sign each is normalised by, and the constant) — skipped then (most of the time of a factorisation here)
+    polynomial_sums = not any(p.is_Pow and p.exp.is_negative for s in expr.atoms(sp.Add) for p in sp.preorder_traversal(s))
+    for arg in sp.Mul.make_args(expr if polynomial_sums and not expr.has(sp.Float) else together(expr, fraction=True)):
         if hasattr(arg, "_eval_factor"):
             return sp.factor(expr)
         if arg.is_Number or pure_complex(arg):
