@@ -8,7 +8,7 @@ import sympy as sp
 
 from mechderive.core import compile as cc
 from mechderive.core.model import SymbolicModel, derivation_seconds, derived, deriving
-from mechderive.core.simplify import TrigField, is_zero, simplify_trig, trig_normal
+from mechderive.core.simplify import TrigField, factor, is_zero, simplify_trig, trig_normal
 from mechderive.core.validate import as_finite_array, check_positive
 from mechderive.errors import InvalidInputError, NonFiniteValueError, ShapeError
 from mechderive.kinematics.euler import KinematicsModel
@@ -220,3 +220,37 @@ def test_dependency_versions_match_importlib_metadata():
 
     for dist in ("sympy", "numpy", "mpmath"):
         assert _version(dist) == version(dist)
+
+
+def phi_dot_sq_form(x, y, th):
+    return x**2 * sp.cos(th) ** 2 - x**2 - y**2
+
+
+def test_factor_is_sympys_factor_expression_for_expression():
+    """core.simplify.factor skips Wang's irreducibility proofs where a polynomial is linear in a generator with
+    coprime coefficients, or quadratic in one with a discriminant that is no square: its result must be
+    sympy.factor's, srepr for srepr, whether or not a shortcut applies."""
+    x, y, z = sp.symbols("x y z")
+    a, b = sp.symbols("a b", positive=True)
+    th = sp.Symbol("theta", real=True)
+    exprs = [
+        2 * a * b / x,  # monomials only
+        (-2 * x * y - 4 * z * sp.sin(th) ** 2 + 6 * x) / a,  # content −2 split off, linear in z: the shortcut
+        (x * y + y * z) / (x**2 - 1),  # y (x + z): a monomial factor, and x² − 1 = (x − 1)(x + 1): by Wang
+        (x + y) ** 2 * (x - z) / (a * x**2),  # square-free parts (x + y) with multiplicity 2
+        x**2 * y**2 - z**2,  # (xy − z)(xy + z): of degree 1 in z? no, 2; by Wang
+        x**2 + y**2 + z,  # linear in z, a = 1: irreducible
+        sp.Rational(3, 4) * x - sp.Rational(1, 2) * y,  # rational coefficients: SymPy's route over QQ
+        x * sp.cos(th) + y * sp.sin(th) - a * b,
+        -phi_dot_sq_form(x, y, th),  # quadratic in y, discriminant not a square: the second shortcut
+        x**2 + y**2, x**2 - y**2, 4 * x**2 - 9, x**2 - 2, (x + y) ** 2 * z**2,  # squares and non-squares
+        x**2 * z + x * y + a * b - 1, (x * z + y) * (x * y + z),
+        sp.expand((x**2 - 1) * (a * y - b * z)), sp.expand((a - b) * (y - z) * (y + z) ** 2),  # linear with a
+        sp.expand(3 * (x - y) * (2 * x + y) * (z - 1)), sp.expand(-(x**2 + y**2) * (x * z - 2)),  # common factor
+        2 * x * y + 2 * x * z, (a * x + a * y) / (b * z - b), -x * y**2 / (2 * x * y - 4 * y),  # sums with common
+        x / y + z, (x + 1 / y) * (x - y) / 3, sp.Rational(1, 2) * (x + y) ** 2 / z,  # factors, denominators in sums
+        sp.sqrt(2) * x + y,  # an algebraic coefficient: SymPy's route
+        sp.Integer(0), sp.Integer(5), x,
+    ]
+    for e in exprs:
+        assert sp.srepr(factor(e)) == sp.srepr(sp.factor(e)), e

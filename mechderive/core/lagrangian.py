@@ -56,7 +56,7 @@ from sympy.polys.polyerrors import BasePolynomialError
 from ..errors import DerivationError, InvalidInputError
 from .compile import compile_scalar
 from .model import SymbolicModel, derived
-from .simplify import TrigField, is_zero, trig_normal
+from .simplify import TrigField, factor, is_zero, trig_normal
 from .symbols import as_symbolic, state_symbol, t, to_state_symbols
 
 __all__ = ["LagrangianModel", "from_state_symbols", "vanishes"]
@@ -75,7 +75,7 @@ def vanishes(expr: Any) -> bool:
 
 def _normal(expr: Any) -> sp.Expr:
     """An exact, fast simplification: the trig normal form (sin² + cos² = 1 reduced), factored."""
-    return sp.factor(trig_normal(expr))
+    return factor(trig_normal(expr))
 
 
 def _solve_in_field(A: sp.Matrix, rhs: sp.Matrix) -> list | None:
@@ -112,7 +112,7 @@ def _solve_in_field(A: sp.Matrix, rhs: sp.Matrix) -> list | None:
     x = [F.field.zero] * n
     for k in reversed(range(n)):
         x[k] = (rows[k][n] - sum((rows[k][j] * x[j] for j in range(k + 1, n)), F.field.zero)) / rows[k][k]
-    return [sp.factor(F.normal(v)) for v in x]
+    return [factor(F.normal(v)) for v in x]
 
 
 def _name(q: sp.Expr) -> str:
@@ -427,4 +427,4 @@ def _tidy(expr: sp.Expr) -> sp.Expr:
     for p in parts:
         _, den = sp.fraction(sp.together(p))
         by_den.setdefault(den, []).append(p)
-    return sp.Add(*[sp.factor(sp.Add(*ps)) for ps in by_den.values()])
+    return sp.Add(*[factor(sp.Add(*ps)) for ps in by_den.values()])

@@ -21,7 +21,7 @@ from sympy.polys.polyerrors import BasePolynomialError
 from ..errors import InvalidInputError
 from .symbols import as_symbolic
 
-__all__ = ["trig_normal", "is_zero", "simplify_trig", "TrigField", "is_zero_rational", "as_fraction"]
+__all__ = ["trig_normal", "is_zero", "simplify_trig", "TrigField", "is_zero_rational", "as_fraction", "factor"]
 
 
 def _trig_symbols(expr: sp.Expr) -> tuple[sp.Expr, dict, dict, list]:
@@ -223,3 +223,156 @@ def simplify_trig(expr: Any) -> sp.Expr:
         return normal
     nice = sp.trigsimp(sp.factor_terms(normal))
     return nice if sp.count_ops(nice) <= sp.count_ops(normal) else normal
+
+
+def _linear_split(poly: Any) -> tuple | None:
+    """(g, q) with ``poly`` = g q, for a primitive polynomial over ZZ of degree 1 in some generator x: p = a x + b,
+    g = gcd(a, b) (free of x) and q = p / g, which is irreducible (of degree 1 in x with coprime coefficients: a
+    factorisation of q has one factor free of x, which divides both).  None where no generator has degree 1."""
+    terms = poly.terms()
+    for i in range(len(poly.gens)):
+        if max(m[i] for m, _ in terms) != 1:
+            continue
+        a = {m[:i] + (0,) + m[i + 1:]: c for m, c in terms if m[i] == 1}
+        b = {m: c for m, c in terms if m[i] == 0}
+        if b and len(a) == 1:  # a monomial c·m: coprime to b iff each of m's generators is missing from a term of b
+            # (the integer c is coprime to b's content, p being primitive)
+            (ma,) = a
+            if all(any(mb[j] == 0 for mb in b) for j, e in enumerate(ma) if e):
+                return sp.Poly(1, *poly.gens, domain=poly.domain), poly
+        pa = sp.Poly.from_dict(a, *poly.gens, domain=poly.domain)
+        g = pa.gcd(sp.Poly.from_dict(b, *poly.gens, domain=poly.domain)) if b else pa
+        return g, poly.exquo(g)
+    return None
+
+
+def _linear_coprime(poly: Any) -> bool:
+    """Whether a primitive polynomial over ZZ is proven irreducible by :func:`_linear_split` (g = 1); False means
+    only "not proven so"."""
+    split = _linear_split(poly)
+    return split is not None and split[0].is_one
+
+
+def _quadratic_prime(poly: Any) -> bool:
+    """Whether a primitive polynomial over ZZ is proven irreducible by being of degree 2 in some generator x:
+    p = a x² + b x + c with gcd(a, b, c) = 1 (no factor free of x) factors only into two factors of degree 1 in
+    x, i.e. has a root in the fraction field, iff its discriminant b² − 4ac is a square there — and so in the
+    ring, a UFD (integrally closed).  It is a square iff its square-free decomposition has a square integer
+    content and no part of odd multiplicity.  False means only "not proven so"."""
+    terms = poly.terms()
+    for i in range(len(poly.gens)):
+        if max(m[i] for m, _ in terms) != 2:
+            continue
+        parts = [{m[:i] + (0,) + m[i + 1:]: c for m, c in terms if m[i] == k} for k in (2, 1, 0)]
+        a, b, c = (sp.Poly.from_dict(d, *poly.gens, domain=poly.domain) if d else sp.Poly(0, *poly.gens, domain=poly.domain)
+                   for d in parts)
+        if not (a.is_ground and abs(a.LC()) == 1) and not a.gcd(b).gcd(c).is_one:
+            continue
+        disc = b**2 - 4 * a * c
+        if disc.is_zero:
+            return False
+        content, factors = disc.sqf_list()
+        square = content > 0 and sp.sqrt(content).is_Integer and all(k % 2 == 0 for _, k in factors)
+        return not square
+    return False
+
+
+def _factor_list(poly: Any) -> tuple:
+    """``poly.factor_list()``, without factorising where the polynomial's primitive part, or else each part of its
+    square-free decomposition, is proven irreducible (:func:`_linear_coprime`, :func:`_quadratic_prime`): then the
+    two coincide over ZZ (both split off the integer content with the sign that makes the leading coefficient
+    positive).  SymPy's multivariate factoriser (Wang's algorithm) spends most of its time proving small
+    polynomials irreducible (most of a derivation's coefficients are); the tests here are a few gcds."""
+    if poly.domain.is_ZZ and not poly.is_ground:
+        # the polynomial itself, first: most met here are irreducible, and then no gcd is needed at all
+        content, primitive = poly.primitive()
+        if primitive.LC() < 0:
+            content, primitive = -content, -primitive
+        split = _linear_split(primitive)
+        if split is not None:
+            # p = g q with q irreducible and g free of q's linear generator: g factorised in turn (a smaller
+            # polynomial, often a product of a few linear ones); the factorisation is unique up to the sign each
+            # factor is normalised by (positive leading coefficient), so this is factor_list's
+            g, q = split
+            if g.is_one:
+                return content, [(primitive, 1)]
+            g_content, g_factors = _factor_list(g)
+            q_content, q = q.primitive()
+            if q.LC() < 0:
+                q_content, q = -q_content, -q
+            return content * g_content * q_content, [*g_factors, (q, 1)]
+        if _quadratic_prime(primitive):
+            return content, [(primitive, 1)]
+        coeff, factors = poly.sqf_list()
+        if all(_linear_coprime(f) or _quadratic_prime(f) for f, _ in factors):
+            return coeff, factors
+    return poly.factor_list()
+
+
+def factor(expr: Any) -> sp.Expr:
+    """``sympy.factor(expr)``, the same expression, with irreducibility proven cheaply where it can be.
+
+    The assembly is SymPy's own (``_symbolic_factor``, ``_symbolic_factor_list`` of :mod:`sympy.polys.polytools`,
+    method ``"factor"``; its ``together`` only where a sum has a denominator), each polynomial's factor list by
+    :func:`_factor_list`; anything else (a non-commutative or non-polynomial argument, an older SymPy without
+    these helpers) goes to :func:`sympy.factor`.  Checked against it expression for expression in
+    ``tests/test_core.py``, and on every call of a cold run while it was written (none differed).
+    """
+    try:
+        from sympy.core.evalf import pure_complex
+        from sympy.core.mul import _keep_coeff
+        from sympy.polys import polyoptions
+        from sympy.polys.polyerrors import PolificationFailed
+        from sympy.polys.polytools import _factors_product, _poly_from_expr
+        from sympy.polys.rationaltools import together
+    except ImportError:  # pragma: no cover - a SymPy without them
+        return sp.factor(expr)
+    expr = as_symbolic(expr)
+    if not isinstance(expr, sp.Expr) or not expr.is_commutative or hasattr(expr, "_eval_factor"):
+        return sp.factor(expr)
+    opt = polyoptions.build_options((), {})
+    opt["fraction"] = True
+    coeff, factors = sp.S.One, []
+    # SymPy first puts the expression over a common denominator (together), whose gcd_terms also pulls common
+    # factors out of sums: where no sum has a denominator in it there is nothing to combine, and what it pulls out
+    # is found by the factorisation anyway (the result depends only on the irreducible factors, unique up to the
+    # sign each is normalised by, and the constant) — skipped then (most of the time of a factorisation here)
+    polynomial_sums = not any(p.is_Pow and p.exp.is_negative for s in expr.atoms(sp.Add) for p in sp.preorder_traversal(s))
+    for arg in sp.Mul.make_args(expr if polynomial_sums and not expr.has(sp.Float) else together(expr, fraction=True)):
+        if hasattr(arg, "_eval_factor"):
+            return sp.factor(expr)
+        if arg.is_Number or pure_complex(arg):
+            coeff *= arg
+            continue
+        if arg.is_Pow and arg.base != sp.S.Exp1:
+            base, exp = arg.args
+            if base.is_Number and exp.is_Number:
+                coeff *= arg
+                continue
+            if base.is_Number:
+                factors.append((base, exp))
+                continue
+        else:
+            base, exp = arg, sp.S.One
+        try:
+            poly, _ = _poly_from_expr(base, opt)
+        except PolificationFailed as exc:
+            factors.append((exc.expr, exp))
+            continue
+        except BasePolynomialError:  # pragma: no cover - as SymPy would: by SymPy
+            return sp.factor(expr)
+        c, fs = _factor_list(poly)
+        if c is not sp.S.One:
+            if not exp.is_Integer:  # (SymPy's further cases: not met here)
+                return sp.factor(expr)
+            coeff *= c**exp
+        if exp is sp.S.One:
+            factors.extend(fs)
+        elif exp.is_integer:
+            factors.extend([(f, k * exp) for f, k in fs])
+        else:
+            return sp.factor(expr)
+    collected: dict = {}
+    for k, v in factors:
+        collected[k] = collected.get(k, 0) + v
+    return _keep_coeff(coeff, _factors_product(list(collected.items())))

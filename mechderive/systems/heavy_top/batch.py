@@ -87,6 +87,7 @@ def _functions() -> dict[str, Any]:
 
     def build_taylor():
         from ...core.rounding import magnitude
+        from ...core.simplify import factor
         from . import exact_model as em
         from . import model as hm
 
@@ -100,11 +101,11 @@ def _functions() -> dict[str, Any]:
         # alone, which must not derive φ's fractions (laziness)
         import sympy as sp
 
-        from ...core.simplify import trig_normal
+        from ...core.simplify import factor, trig_normal
         from . import model as hm
 
         cfs, th = hm.model().constants_from_state, hm.STATE[0]
-        rate0 = sp.factor(trig_normal(cfs[hm.b] - cfs[hm.a] * sp.cos(th)))
+        rate0 = factor(trig_normal(cfs[hm.b] - cfs[hm.a] * sp.cos(th)))
         half = {"d_bottom": 2 * sp.cos(th / 2) ** 2, "d_pole": -2 * sp.sin(th / 2) ** 2}
         return [*hm.PARAMETERS, *hm.STATE], _binary_exact([rate0, half["d_bottom"], half["d_pole"]])
 
@@ -120,9 +121,9 @@ def _functions() -> dict[str, Any]:
         # (the 1/3 is applied in the pipeline: a constant 1/3 compiled into the code would be a double, and limit
         # the extended tier to double precision in a term that cancels)
         fr = em.model().precession_fractions_shifted
-        at_u1 = sp.factor(sp.together(fr["c0"] + sum(c for c, _ in fr["terms"])))
-        flat = [at_u1] + [x for c, n in fr["terms"] for x in (sp.factor(c * n), n)]
-        sizes = [magnitude(at_u1)] + [magnitude(sp.factor(c * n)) for c, n in fr["terms"]]
+        at_u1 = factor(sp.together(fr["c0"] + sum(c for c, _ in fr["terms"])))
+        flat = [at_u1] + [x for c, n in fr["terms"] for x in (factor(c * n), n)]
+        sizes = [magnitude(at_u1)] + [magnitude(factor(c * n)) for c, n in fr["terms"]]
         return fr["args"], _binary_exact(flat + sizes)
 
     def build_nutation():

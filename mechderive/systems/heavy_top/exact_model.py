@@ -26,7 +26,7 @@ import functools
 import sympy as sp
 
 from ...core.model import SymbolicModel, derived
-from ...core.simplify import TrigField, is_zero_rational, trig_normal
+from ...core.simplify import TrigField, factor, is_zero_rational, trig_normal
 from ...errors import DerivationError
 from . import model as heavy_model
 
@@ -54,7 +54,7 @@ def _simple_poles(along: sp.Expr, x: sp.Symbol) -> tuple[sp.Expr, list[tuple[sp.
     terms of one pole merged), checked by rebuilding it."""
     c0, terms = sp.Integer(0), []
     for term in sp.Add.make_args(sp.expand(sp.apart(along, x, full=False))):
-        num, den = sp.fraction(sp.factor(term))
+        num, den = sp.fraction(factor(term))
         if not den.has(x):
             c0 += term
             continue
@@ -64,18 +64,18 @@ def _simple_poles(along: sp.Expr, x: sp.Symbol) -> tuple[sp.Expr, list[tuple[sp.
         if num.has(x):
             raise DerivationError(f"expected a constant numerator, got {num}")
         d1, d0 = poly.all_coeffs()
-        c, n = num / d0, sp.factor(-d1 / d0)
+        c, n = num / d0, factor(-d1 / d0)
         for k, (c_old, n_old) in enumerate(terms):
             if _is_zero_rational(n - n_old):  # the same pole: one term
                 terms[k] = (c_old + c, n_old)
                 break
         else:
             terms.append((c, n))
-    terms = [(sp.factor(c), n) for c, n in terms]
+    terms = [(factor(c), n) for c, n in terms]
     rebuilt = c0 + sum(c / (1 - n * x) for c, n in terms)
     if not _is_zero_rational(rebuilt - along):
         raise DerivationError("partial fractions do not reproduce the rate")
-    return sp.factor(c0), terms
+    return factor(c0), terms
 
 
 class HeavyTopExactModel(SymbolicModel):
@@ -127,9 +127,9 @@ class HeavyTopExactModel(SymbolicModel):
         sol = list(sp.linsolve([c for c in coeffs if c != 0], [k2, p]))
         if len(sol) != 1 or any(v.free_symbols & {k2, p} for v in sol[0]):
             raise DerivationError(f"expected one (κ², κ² m) for the nutation ansatz, got {sol}")
-        kappa_sq = sp.factor(sol[0][0])
-        m = sp.factor(sol[0][1] / sol[0][0])
-        return {"kappa2": kappa_sq, "m": m, "m1": sp.factor(1 - m)}
+        kappa_sq = factor(sol[0][0])
+        m = factor(sol[0][1] / sol[0][0])
+        return {"kappa2": kappa_sq, "m": m, "m1": factor(1 - m)}
 
     def _partial_fractions(self, rate_u: sp.Expr) -> dict:
         """rate(u) along the ansatz as c0 + Σ c_i/(1 - n_i x), x = sn²; returns {"c0": .., "terms": [(c_i, n_i)]}.
@@ -143,7 +143,7 @@ class HeavyTopExactModel(SymbolicModel):
         u = heavy_model.u
         c0, terms = sp.Integer(0), []
         for term in sp.Add.make_args(heavy_model.partial_fractions_in_u(rate_u)):
-            num, den = sp.fraction(sp.factor(term))
+            num, den = sp.fraction(factor(term))
             if not den.has(u):
                 c0 += term
                 continue
@@ -152,13 +152,13 @@ class HeavyTopExactModel(SymbolicModel):
                 raise DerivationError(f"expected simple poles in u with constant numerators, got {term}")
             p, q = poly.all_coeffs()
             at_u1 = p * u1 + q
-            terms.append((sp.factor(num / at_u1), sp.factor(-p * (u2 - u1) / at_u1)))
+            terms.append((factor(num / at_u1), factor(-p * (u2 - u1) / at_u1)))
         along = rate_u.subs(u, u1 + (u2 - u1) * _x)
         if not _is_zero_rational(c0 + sum(c / (1 - n * _x) for c, n in terms) - along):
             raise DerivationError("partial fractions do not reproduce the rate")
         # in a fixed order (of n), whatever order apart lists its terms in
         terms.sort(key=lambda cn: sp.default_sort_key(cn[1]))
-        return {"c0": sp.factor(c0), "terms": terms}
+        return {"c0": factor(c0), "terms": terms}
 
     @derived
     def f_taylor_state(self) -> tuple[sp.Expr, ...]:
@@ -185,7 +185,7 @@ class HeavyTopExactModel(SymbolicModel):
                 partial.append(c if not partial else partial[-1] * u0 + c)
             taylor.append(partial.pop())  # the remainder of the division by u − u0
             remaining = partial
-        coeffs = tuple(sp.factor(F.normal(c)) for c in reversed(taylor))
+        coeffs = tuple(factor(F.normal(c)) for c in reversed(taylor))
         if len(coeffs) != 4:
             raise DerivationError(f"expected a cubic f(u0 + w), got coefficients {coeffs}")
         return coeffs
@@ -225,7 +225,7 @@ class HeavyTopExactModel(SymbolicModel):
         c0, terms = _simple_poles(sp.together((num_shift / (const * factored_den)).subs(w, w1 + amp * x)), x)
         th = hm.theta
         cfs = hm.model().constants_from_state
-        values = {rate0: sp.factor(trig_normal(coeffs[-1].subs(hm.u0, sp.cos(th)).subs(cfs)))}
+        values = {rate0: factor(trig_normal(coeffs[-1].subs(hm.u0, sp.cos(th)).subs(cfs)))}
         for d, r in gaps.items():
             # cos θ0 − r in the half angle: −2 sin²(θ0/2) or 2 cos²(θ0/2), no cancellation at the poles
             half = -2 * sp.sin(th / 2) ** 2 if r == 1 else 2 * sp.cos(th / 2) ** 2

@@ -44,7 +44,7 @@ import sympy as sp
 
 from ...core.lagrangian import LagrangianModel, from_state_symbols, vanishes
 from ...core.model import derived
-from ...core.simplify import as_fraction, is_zero_rational, trig_normal
+from ...core.simplify import as_fraction, factor, is_zero_rational, trig_normal
 from ...core.symbols import as_symbolic, euler_angles, state_symbol, t, to_state_symbols
 from ...errors import DerivationError
 from ...kinematics import euler as _euler
@@ -87,7 +87,7 @@ def _shorter_form(coeff: sp.Expr) -> sp.Expr:
     """``coeff`` or its factored form in cos θ (sin² as 1 − cos²), the shorter: for :func:`_readable`, which
     meets the same coefficients again (T's in E, E's I1 part in E'), each factored once (a third of the
     factorisations before the fork of a cold start were repeats)."""
-    alt = sp.factor(sp.expand(coeff.replace(sp.sin, lambda x: sp.sqrt(1 - sp.cos(x) ** 2))))
+    alt = factor(sp.expand(coeff.replace(sp.sin, lambda x: sp.sqrt(1 - sp.cos(x) ** 2))))
     return alt if sp.count_ops(alt) < sp.count_ops(coeff) else coeff
 
 
@@ -100,8 +100,8 @@ def _in_u(expr: sp.Expr) -> sp.Expr:
     sin_sq = lambda x: x.is_Pow and x.base == sp.sin(theta) and x.exp.is_Integer and x.exp.is_even  # noqa: E731
     direct = expr.xreplace({sp.cos(theta): u}).replace(sin_sq, lambda x: (1 - u**2) ** (x.exp // 2))
     if direct.has(theta):  # an odd power of sin θ, or θ elsewhere: the general route
-        return sp.factor(sp.cancel(expr.subs(theta, sp.acos(u))))
-    return sp.factor(as_fraction(direct))
+        return factor(sp.cancel(expr.subs(theta, sp.acos(u))))
+    return factor(as_fraction(direct))
 
 
 @functools.lru_cache(maxsize=8)
@@ -120,9 +120,9 @@ def _over_one_minus_u2(expr: sp.Expr) -> sp.Expr:
     scale = sp.cancel(den / (1 - u**2))
     if scale.has(u):
         return expr
-    whole = sp.factor(num / scale) / (1 - u**2)
+    whole = factor(num / scale) / (1 - u**2)
     q, r = sp.div(sp.Poly(num, u), sp.Poly(den, u))
-    split = sp.factor(q.as_expr()) + sp.factor(r.as_expr() / scale) / (1 - u**2)
+    split = factor(q.as_expr()) + factor(r.as_expr() / scale) / (1 - u**2)
     return min((whole, split), key=sp.count_ops)
 
 
@@ -199,7 +199,7 @@ class HeavyTopModel(LagrangianModel):
         p = self.conserved_momenta[self.coordinates[2]]
         if not vanishes(p - I3 * self.spin):
             raise DerivationError(f"expected p_ψ = I3 ω3, got {p}")
-        return sp.factor(p)
+        return factor(p)
 
     @derived
     def azimuthal_momentum(self) -> sp.Expr:
@@ -268,7 +268,7 @@ class HeavyTopModel(LagrangianModel):
     def spin_energy(self) -> sp.Expr:
         """½ I3 ω3² in the conserved momenta (= p_ψ²/(2 I3)): the constant E' leaves out."""
         # the normal form, factored (the θ, θ̇ it must be free of cancel in the normal form: exact)
-        e = sp.factor(trig_normal((I3 * self.spin**2 / 2).subs(self.cyclic_velocities)))
+        e = factor(trig_normal((I3 * self.spin**2 / 2).subs(self.cyclic_velocities)))
         if e.has(theta, theta_dot):
             raise DerivationError(f"expected ½ I3 ω3² to depend on the momenta only, got {e}")
         return e
@@ -278,7 +278,7 @@ class HeavyTopModel(LagrangianModel):
         """V_eff(θ) of (3.70): the Routhian's effective potential less ½ I3 ω3², in a, b."""
         v = _in_u((self.effective_potential - self.spin_energy).subs(self.momenta_in_ab))
         gravity = sp.expand(v).coeff(M)
-        return M * sp.factor(gravity).subs(u, sp.cos(theta)) + _theta_form(v - M * gravity)
+        return M * factor(gravity).subs(u, sp.cos(theta)) + _theta_form(v - M * gravity)
 
     @derived
     def reduced_energy_terms(self) -> tuple[sp.Expr, sp.Expr]:
@@ -298,7 +298,7 @@ class HeavyTopModel(LagrangianModel):
         """E' (3.69) in θ, θ̇, a, b, readable: ½ I1 θ̇² + the gravity term + the rest over sin²θ."""
         mass, rest = self.reduced_energy_terms
         gravity = sp.expand(_in_u(rest)).coeff(M)
-        return sp.factor(mass) * theta_dot**2 + M * sp.factor(gravity).subs(u, sp.cos(theta)) + \
+        return factor(mass) * theta_dot**2 + M * factor(gravity).subs(u, sp.cos(theta)) + \
             _theta_form(rest - M * gravity.subs(u, sp.cos(theta)))
 
     # --- (3.71)-(3.76): the cubic f(u) ------------------------------------------------------
@@ -325,7 +325,7 @@ class HeavyTopModel(LagrangianModel):
             raise DerivationError(f"expected f(u) polynomial in u with coefficients in a, b, α, β, got {f}")
         # readable: the part in α, β factored as (1 − u²)(α − βu) would be, the rest as −(b − au)²
         rest = sp.expand(f).coeff(alpha, 0).coeff(beta, 0)
-        return sp.expand(f - rest) + sp.factor(rest)
+        return sp.expand(f - rest) + factor(rest)
 
     @derived
     def f_polynomial(self) -> sp.Poly:
@@ -363,13 +363,13 @@ class HeavyTopModel(LagrangianModel):
             back = parts.xreplace({x: 1 - u, y: 1 + u, dm: b - a, dp: b + a})
             if is_zero_rational(back - rate) is not True:
                 raise DerivationError(f"expected the partial fractions to reproduce {rate}, got {parts}")
-            out.append(sp.collect(parts, [x, y], sp.factor))
+            out.append(sp.collect(parts, [x, y], factor))
         return tuple(out)  # type: ignore[return-value]
 
     @derived
     def f_at_poles(self) -> tuple[sp.Expr, sp.Expr]:
         """(f(1), f(−1)) (3.76), factored."""
-        return tuple(sp.factor(self.f_u.subs(u, x)) for x in (1, -1))  # type: ignore[return-value]
+        return tuple(factor(self.f_u.subs(u, x)) for x in (1, -1))  # type: ignore[return-value]
 
     @derived
     def f_limits(self) -> tuple[sp.Expr, sp.Expr]:
@@ -379,7 +379,7 @@ class HeavyTopModel(LagrangianModel):
     @derived
     def f_coefficients(self) -> tuple[sp.Expr, ...]:
         """The coefficients of u³, u², u, 1 in f(u) (3.73), in a, b, α, β."""
-        coeffs = tuple(sp.factor(c) for c in self.f_polynomial.all_coeffs())
+        coeffs = tuple(factor(c) for c in self.f_polynomial.all_coeffs())
         if len(coeffs) != 4:
             raise DerivationError(f"expected a cubic f(u), got coefficients {coeffs}")
         return coeffs
@@ -391,7 +391,7 @@ class HeavyTopModel(LagrangianModel):
         a, b, α, β replaced by their definitions (3.66), (3.72) evaluated at the state; then
         f(cos θ) = sin²θ θ̇² at that state, and the roots of f bound the motion in u.
         """
-        return tuple(sp.factor(trig_normal(c.subs(self.constants_from_state))) for c in self.f_coefficients)
+        return tuple(factor(trig_normal(c.subs(self.constants_from_state))) for c in self.f_coefficients)
 
     def f_coefficients_function(self) -> Callable[..., Any]:
         """Compiled ``f(I1, I3, M, g, l, theta, theta_dot, phi_dot, psi_dot)`` → shape (..., 4): f's coefficients of u³, u², u, 1.
@@ -424,9 +424,9 @@ class HeavyTopModel(LagrangianModel):
             in_h = sp.expand_trig(expr.xreplace({theta: 2 * h}))
             # the normal form modulo sin² + cos² = 1 (in sin h), factored: b − a has the factor sin²h; b + a the
             # factor (sin h − 1)(sin h + 1), which is −cos²h — written so, or 1 − sin h would cancel at the bottom
-            half = _product_replaced(sp.factor(trig_normal(in_h)), (sp.sin(h) - 1, sp.sin(h) + 1), -sp.cos(h) ** 2)
+            half = _product_replaced(factor(trig_normal(in_h)), (sp.sin(h) - 1, sp.sin(h) + 1), -sp.cos(h) ** 2)
             if not any(f in (sp.sin(h) ** 2, sp.cos(h) ** 2) for f in sp.Mul.make_args(half)):
-                half = sp.factor(sp.trigsimp(sp.factor(in_h)))  # the general (slow) route
+                half = factor(sp.trigsimp(factor(in_h)))  # the general (slow) route
             if trig_normal(half - in_h) != 0:
                 raise DerivationError(f"expected b {'+' if sign > 0 else '−'} a in the half angle, got {half}")
             out.append(half.xreplace({h: theta / 2}))
@@ -453,7 +453,7 @@ class HeavyTopModel(LagrangianModel):
         alpha_rel = sp.solve(f.subs(u, u0), alpha)
         if len(alpha_rel) != 1:
             raise DerivationError(f"expected one α with f(u0) = 0, got {alpha_rel}")
-        return sp.factor(f.diff(u).subs(u, u0).subs(alpha, alpha_rel[0]))
+        return factor(f.diff(u).subs(u, u0).subs(alpha, alpha_rel[0]))
 
     @derived
     def azimuthal_momentum_spin(self) -> sp.Expr:
@@ -464,7 +464,7 @@ class HeavyTopModel(LagrangianModel):
     @derived
     def released_azimuthal_momentum(self) -> sp.Expr:
         """p_φ at release, φ̇ = 0 (3.78): I3 ω3 cos θ."""
-        return sp.factor(self.azimuthal_momentum_spin.subs(phi_dot, 0))
+        return factor(self.azimuthal_momentum_spin.subs(phi_dot, 0))
 
     # --- (3.79)-(3.81): uniform precession ---------------------------------------------------
 
@@ -481,7 +481,7 @@ class HeavyTopModel(LagrangianModel):
         alpha_sol = sp.solve(f0, alpha)
         if len(alpha_sol) != 1:
             raise DerivationError(f"expected f(u0) = 0 linear in α, got {alpha_sol}")
-        beta_sol = sp.solve(sp.factor(df0.subs(alpha, alpha_sol[0])), beta)
+        beta_sol = sp.solve(factor(df0.subs(alpha, alpha_sol[0])), beta)
         if len(beta_sol) != 1:
             raise DerivationError(f"expected f'(u0) = 0 linear in β, got {beta_sol}")
         return sp.expand(beta_sol[0] / 2)
@@ -490,7 +490,7 @@ class HeavyTopModel(LagrangianModel):
     def uniform_precession_condition(self) -> sp.Equality:
         """(3.80): M g l = I1 β/2 with a = I3ω3/I1 and u0 = cos θ0, a quadratic in φ̇."""
         rhs = (I1 * self.uniform_precession_half_beta).subs({a: I3 * omega3 / I1, u0: sp.cos(theta0)})
-        return sp.Eq(M * g * l, sp.factor(sp.expand(rhs)))
+        return sp.Eq(M * g * l, factor(sp.expand(rhs)))
 
     @derived
     def uniform_precession_polynomial(self) -> sp.Poly:
@@ -501,7 +501,7 @@ class HeavyTopModel(LagrangianModel):
     @derived
     def precession_discriminant(self) -> sp.Expr:
         """The discriminant of (3.80) in φ̇: I3²ω3² − 4 I1 M g l cos θ0 (real rates iff ≥ 0)."""
-        return sp.factor(sp.discriminant(self.uniform_precession_polynomial.as_expr(), phi_dot))
+        return factor(sp.discriminant(self.uniform_precession_polynomial.as_expr(), phi_dot))
 
     @derived
     def precession_rates(self) -> tuple[sp.Expr, sp.Expr]:
@@ -554,7 +554,7 @@ class HeavyTopModel(LagrangianModel):
         max(cos θ0, 0), continuous at θ0 = π/2.
         """
         disc = self.precession_discriminant
-        at_rest = sp.factor(disc.subs(omega3, 0))
+        at_rest = factor(disc.subs(omega3, 0))
         k = sp.Symbol("k", positive=True)
         if not (sp.expand(disc - at_rest).subs(omega3, k).is_positive and at_rest.subs(sp.cos(theta0), -k).is_positive):
             raise DerivationError(f"expected the discriminant ≥ 0 for cos θ0 ≤ 0 at any spin, got {disc}")
@@ -578,7 +578,7 @@ class HeavyTopModel(LagrangianModel):
     @derived
     def sleeping_f(self) -> sp.Expr:
         """f(u) for the sleeping top (3.83): (3.73) with b = a and β = α, factored."""
-        return sp.factor(self.f_u.subs(self.sleeping_constants))
+        return factor(self.f_u.subs(self.sleeping_constants))
 
     @derived
     def sleeping_roots(self) -> dict:
