@@ -87,7 +87,6 @@ def _functions() -> dict[str, Any]:
 
     def build_taylor():
         from ...core.rounding import magnitude
-        from ...core.simplify import factor
         from . import exact_model as em
         from . import model as hm
 
@@ -113,6 +112,7 @@ def _functions() -> dict[str, Any]:
         import sympy as sp
 
         from ...core.rounding import magnitude
+        from ...core.simplify import factor
         from . import exact_model as em
 
         # Δφ per period = (2/κ)[c0 K + Σ c_i Π(n_i | m)] with Π = K + (n/3) R_J (DLMF 19.25.2), regrouped as
