@@ -27,6 +27,9 @@ this package guarantee it; outside it the results are NaN or inf, not errors.
 
 from __future__ import annotations
 
+import functools
+import math
+
 import numpy as np
 
 from ..core.validate import every, some
@@ -41,6 +44,7 @@ def _dtype(*args) -> type:
     return np.longdouble if any(np.asarray(a).dtype == np.longdouble for a in args) else np.float64
 
 
+@functools.cache
 def _q(dtype: type) -> tuple[float, float, float]:
     """Carlson's (Q_F, Q_J, Q_C) factors for the rounding unit r of ``dtype``."""
     r = float(np.finfo(dtype).eps) / 2
@@ -54,6 +58,12 @@ def _as_float(*args):
 
 def elliprf(x, y, z):
     """R_F(x, y, z) (DLMF 19.16.1) by duplication (Carlson 1995, algorithm 1)."""
+    one = _one_point((x, y, z), zeros=1)
+    if one is not None:
+        try:
+            return _shaped(_rf_one(*one[0]), *one[1:])
+        except ZeroDivisionError:  # an underflow to 0 that the array code turns into inf: its answer
+            pass
     x0, y0, z0 = _as_float(x, y, z)
     A0 = (x0 + y0 + z0) / 3
     Q = _q(x0.dtype.type)[0] * np.maximum(np.abs(A0 - x0), np.maximum(np.abs(A0 - y0), np.abs(A0 - z0)))
@@ -175,6 +185,12 @@ def _rj_positive(x, y, z, p):
 
 def elliprj(x, y, z, p):
     """R_J(x, y, z, p) (DLMF 19.16.2); for p < 0 the Cauchy principal value (DLMF 19.20.14)."""
+    one = _one_point((x, y, z, p), zeros=1, positive_last=True)
+    if one is not None:
+        try:
+            return _shaped(_rj_one(*one[0]), *one[1:])
+        except ZeroDivisionError:  # an underflow to 0 that the array code turns into inf: its answer
+            pass
     if not some(np.asarray(p) < 0):
         return _rj_positive(x, y, z, p)
     x, y, z, p = _as_float(x, y, z, p)
@@ -200,3 +216,111 @@ def elliprd(x, y, z):
     """R_D(x, y, z) = R_J(x, y, z, z) (DLMF 19.16.5)."""
     x, y, z = _as_float(x, y, z)
     return _rj_positive(x, y, z, z)
+
+
+# --- one point: the same steps on scalars ------------------------------------------------------------------
+# A closed form's setup evaluates these at single points, where NumPy's per-call cost (~3k instructions on an
+# array of one, ~1k on a NumPy scalar, against ~60 for a Python float) is all of the time.  One point in the
+# domain runs the very operations of the array code, in the same order, on Python floats (doubles) or NumPy
+# longdouble scalars — the same IEEE arithmetic, so the same bits (tests/test_special_elliptic.py compares them
+# bit for bit); anything else (arrays, points outside the domain, where the array code's NaN and inf are the
+# answer) takes the array code.
+
+
+def _one_point(args: tuple, *, zeros: int, positive_last: bool = False) -> tuple | None:
+    """(values, longdouble, ndim) for arguments that are one point inside the domain — finite, ≥ 0, at most
+    ``zeros`` of them 0, the last > 0 with ``positive_last`` — as Python floats or longdouble scalars; else None."""
+    values, ndim, extended = [], 0, False
+    for a in args:
+        if type(a) is float:
+            values.append(a)
+            continue
+        arr = np.asarray(a)
+        if arr.size != 1 or arr.dtype.kind not in "fiu":
+            return None
+        ndim = max(ndim, arr.ndim)
+        extended = extended or arr.dtype == np.longdouble
+        values.append(arr.reshape(-1)[0])
+    values = [np.longdouble(v) for v in values] if extended else [float(v) for v in values]
+    if not all(0 <= v < math.inf for v in values) or sum(v == 0 for v in values) > zeros \
+            or (positive_last and not values[-1] > 0):
+        return None
+    return values, extended, ndim
+
+
+def _shaped(value, extended: bool, ndim: int):
+    """``value`` as the array code returns it: a NumPy scalar for scalar arguments, else an array of one."""
+    dtype = np.longdouble if extended else np.float64
+    return dtype(value) if ndim == 0 else np.full((1,) * ndim, value, dtype=dtype)
+
+
+def _sqrt_of(x):
+    """√ for the kind of ``x``: math.sqrt on floats (correctly rounded, as np.sqrt), np.sqrt on longdouble."""
+    return math.sqrt if type(x) is float else np.sqrt
+
+
+def _rf_one(x0, y0, z0):
+    """:func:`elliprf`'s steps on one point (see above)."""
+    sqrt = _sqrt_of(x0)
+    A0 = (x0 + y0 + z0) / 3
+    Q = _q(np.longdouble if type(x0) is not float else np.float64)[0] * max(abs(A0 - x0), abs(A0 - y0), abs(A0 - z0))
+    x, y, z, A = x0, y0, z0, A0
+    scale = 1.0
+    for _ in range(_MAX_STEPS):
+        if scale * Q < A:
+            break
+        sx, sy, sz = sqrt(x), sqrt(y), sqrt(z)
+        lam = sx * sy + sx * sz + sy * sz
+        x, y, z, A = (x + lam) / 4, (y + lam) / 4, (z + lam) / 4, (A + lam) / 4
+        scale = scale / 4
+    X = (A0 - x0) * scale / A
+    Y = (A0 - y0) * scale / A
+    Z = -(X + Y)
+    E2 = X * Y - Z * Z
+    E3 = X * Y * Z
+    return (1 - E2 / 10 + E3 / 14 + E2 * E2 / 24 - 3 * E2 * E3 / 44) / sqrt(A)
+
+
+def _rc_one_scalar(e):
+    """:func:`_rc_one` for one value (e > -1)."""
+    if abs(e) < 1e-3:
+        return _rc_one_series(e)
+    r = _sqrt_of(e)(abs(e))
+    if type(e) is float:  # NumPy's arctan, arctanh (as the array code): libm's may differ in the last bit
+        return float(np.arctan(r) if e > 0 else np.arctanh(r)) / r
+    return (np.arctan(r) if e > 0 else np.arctanh(r)) / r
+
+
+def _rj_one(x, y, z, p):
+    """:func:`_rj_positive`'s steps on one point, p > 0 (see above)."""
+    sqrt = _sqrt_of(x)
+    A0 = (x + y + z + 2 * p) / 5
+    delta = (p - x) * (p - y) * (p - z)
+    Q = _q(np.longdouble if type(x) is not float else np.float64)[1] * max(
+        max(abs(A0 - x), abs(A0 - y)), max(abs(A0 - z), abs(A0 - p)))
+    x0, y0, z0 = x, y, z
+    A = A0
+    scale = 1.0
+    total = 0.0
+    for _ in range(_MAX_STEPS):
+        if scale * Q < A:
+            break
+        sx, sy, sz, sp = sqrt(x), sqrt(y), sqrt(z), sqrt(p)
+        lam = sx * sy + sx * sz + sy * sz
+        d = (sp + sx) * (sp + sy) * (sp + sz)
+        e = (delta * scale**3) / (d * d)
+        total = total + scale * _rc_one_scalar(e) / d
+        x, y, z, p, A = (x + lam) * 0.25, (y + lam) * 0.25, (z + lam) * 0.25, (p + lam) * 0.25, (A + lam) * 0.25
+        scale *= 0.25
+    X = (A0 - x0) * scale / A
+    Y = (A0 - y0) * scale / A
+    Z = (A0 - z0) * scale / A
+    P = -(X + Y + Z) / 2
+    XYZ = X * Y * Z
+    P2 = P * P
+    E2 = X * Y + X * Z + Y * Z - 3 * P2
+    E3 = XYZ + 2 * E2 * P + 4 * P2 * P
+    E4 = (2 * XYZ + E2 * P + 3 * P2 * P) * P
+    E5 = XYZ * P2
+    series = (1 - 3 * E2 / 14 + E3 / 6 + 9 * E2 * E2 / 88 - 3 * E4 / 22 - 9 * E2 * E3 / 52 + 3 * E5 / 26)
+    return scale * series / (A * sqrt(A)) + 6 * total
