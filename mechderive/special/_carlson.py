@@ -80,13 +80,17 @@ def elliprf(x, y, z):
             lam = sx * sy + sx * sz + sy * sz
             xyzA = (xyzA + lam) / 4
             scale = scale / 4
-        A = xyzA[3]
-        X = (A0 - x0) * scale / A
-        Y = (A0 - y0) * scale / A
-        Z = -(X + Y)
-        E2 = X * Y - Z * Z
-        E3 = X * Y * Z
-        return (1 - E2 / 10 + E3 / 14 + E2 * E2 / 24 - 3 * E2 * E3 / 44) / np.sqrt(A)
+        return _rf_series(A0, x0, y0, xyzA[3], scale, np.sqrt)
+
+
+def _rf_series(A0, x0, y0, A, scale, sqrt):
+    """R_F from the last duplication step: Carlson's fifth-order series about the mean A (arrays or scalars)."""
+    X = (A0 - x0) * scale / A
+    Y = (A0 - y0) * scale / A
+    Z = -(X + Y)
+    E2 = X * Y - Z * Z
+    E3 = X * Y * Z
+    return (1 - E2 / 10 + E3 / 14 + E2 * E2 / 24 - 3 * E2 * E3 / 44) / sqrt(A)
 
 
 def elliprc(x, y):
@@ -161,26 +165,37 @@ def _rj_positive(x, y, z, p):
         for _ in range(_MAX_STEPS):
             if every(scale * Q < A):  # (A > 0 for p > 0: |A| is A)
                 break
-            sx, sy, sz, sp = np.sqrt(x), np.sqrt(y), np.sqrt(z), np.sqrt(p)
-            lam = sx * sy + sx * sz + sy * sz
-            d = (sp + sx) * (sp + sy) * (sp + sz)
-            e = (delta * scale**3) / (d * d)
-            total = total + scale * _rc_one(e) / d
-            x, y, z, p, A = (x + lam) * 0.25, (y + lam) * 0.25, (z + lam) * 0.25, (p + lam) * 0.25, (A + lam) * 0.25
+            x, y, z, p, A, total = _rj_step(x, y, z, p, A, delta, scale, total, np.sqrt, _rc_one)
             scale *= 0.25
-        X = (A0 - x0) * scale / A
-        Y = (A0 - y0) * scale / A
-        Z = (A0 - z0) * scale / A
-        P = -(X + Y + Z) / 2
-        XYZ = X * Y * Z
-        P2 = P * P
-        E2 = X * Y + X * Z + Y * Z - 3 * P2
-        E3 = XYZ + 2 * E2 * P + 4 * P2 * P
-        E4 = (2 * XYZ + E2 * P + 3 * P2 * P) * P
-        E5 = XYZ * P2
-        series = (1 - 3 * E2 / 14 + E3 / 6 + 9 * E2 * E2 / 88 - 3 * E4 / 22 - 9 * E2 * E3 / 52 + 3 * E5 / 26)
-        result = scale * series / (A * np.sqrt(A)) + 6 * total
+        result = _rj_series(A0, x0, y0, z0, A, scale, total, np.sqrt)
     return result if result.shape == shape else np.broadcast_to(result, shape).copy()
+
+
+def _rj_step(x, y, z, p, A, delta, scale, total, sqrt, rc_one):
+    """One duplication step of R_J (arrays or scalars): the arguments and the mean moved, the step's R_C term added."""
+    sx, sy, sz, sp = sqrt(x), sqrt(y), sqrt(z), sqrt(p)
+    lam = sx * sy + sx * sz + sy * sz
+    d = (sp + sx) * (sp + sy) * (sp + sz)
+    e = (delta * scale**3) / (d * d)
+    total = total + scale * rc_one(e) / d
+    return (x + lam) * 0.25, (y + lam) * 0.25, (z + lam) * 0.25, (p + lam) * 0.25, (A + lam) * 0.25, total
+
+
+def _rj_series(A0, x0, y0, z0, A, scale, total, sqrt):
+    """R_J from the last duplication step: Carlson's fifth-order series about the mean A plus the R_C terms'
+    ``total`` (arrays or scalars)."""
+    X = (A0 - x0) * scale / A
+    Y = (A0 - y0) * scale / A
+    Z = (A0 - z0) * scale / A
+    P = -(X + Y + Z) / 2
+    XYZ = X * Y * Z
+    P2 = P * P
+    E2 = X * Y + X * Z + Y * Z - 3 * P2
+    E3 = XYZ + 2 * E2 * P + 4 * P2 * P
+    E4 = (2 * XYZ + E2 * P + 3 * P2 * P) * P
+    E5 = XYZ * P2
+    series = (1 - 3 * E2 / 14 + E3 / 6 + 9 * E2 * E2 / 88 - 3 * E4 / 22 - 9 * E2 * E3 / 52 + 3 * E5 / 26)
+    return scale * series / (A * sqrt(A)) + 6 * total
 
 
 def elliprj(x, y, z, p):
@@ -273,12 +288,7 @@ def _rf_one(x0, y0, z0):
         lam = sx * sy + sx * sz + sy * sz
         x, y, z, A = (x + lam) / 4, (y + lam) / 4, (z + lam) / 4, (A + lam) / 4
         scale = scale / 4
-    X = (A0 - x0) * scale / A
-    Y = (A0 - y0) * scale / A
-    Z = -(X + Y)
-    E2 = X * Y - Z * Z
-    E3 = X * Y * Z
-    return (1 - E2 / 10 + E3 / 14 + E2 * E2 / 24 - 3 * E2 * E3 / 44) / sqrt(A)
+    return _rf_series(A0, x0, y0, A, scale, sqrt)
 
 
 def _rc_one_scalar(e):
@@ -305,22 +315,6 @@ def _rj_one(x, y, z, p):
     for _ in range(_MAX_STEPS):
         if scale * Q < A:
             break
-        sx, sy, sz, sp = sqrt(x), sqrt(y), sqrt(z), sqrt(p)
-        lam = sx * sy + sx * sz + sy * sz
-        d = (sp + sx) * (sp + sy) * (sp + sz)
-        e = (delta * scale**3) / (d * d)
-        total = total + scale * _rc_one_scalar(e) / d
-        x, y, z, p, A = (x + lam) * 0.25, (y + lam) * 0.25, (z + lam) * 0.25, (p + lam) * 0.25, (A + lam) * 0.25
+        x, y, z, p, A, total = _rj_step(x, y, z, p, A, delta, scale, total, sqrt, _rc_one_scalar)
         scale *= 0.25
-    X = (A0 - x0) * scale / A
-    Y = (A0 - y0) * scale / A
-    Z = (A0 - z0) * scale / A
-    P = -(X + Y + Z) / 2
-    XYZ = X * Y * Z
-    P2 = P * P
-    E2 = X * Y + X * Z + Y * Z - 3 * P2
-    E3 = XYZ + 2 * E2 * P + 4 * P2 * P
-    E4 = (2 * XYZ + E2 * P + 3 * P2 * P) * P
-    E5 = XYZ * P2
-    series = (1 - 3 * E2 / 14 + E3 / 6 + 9 * E2 * E2 / 88 - 3 * E4 / 22 - 9 * E2 * E3 / 52 + 3 * E5 / 26)
-    return scale * series / (A * sqrt(A)) + 6 * total
+    return _rj_series(A0, x0, y0, z0, A, scale, total, sqrt)
