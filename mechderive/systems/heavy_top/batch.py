@@ -362,8 +362,8 @@ def _tier(P: list[np.ndarray], S: list[np.ndarray], names: tuple[str, ...], dtyp
             moved = [both[:n], both[n:]]
             dw = (np.max([np.abs(x - w) for x in moved], axis=0) + noise / slope + 2 * last_step).astype(float)
             amp = (w[:, 1] - w[:, 0]).astype(float)
-            stacked = _pipeline(F, [_thrice(x) for x in P[:2]], _thrice(a), _thrice(beta), [_thrice(x) for x in shift],
-                              np.concatenate([w, both]), want_advance)
+            stacked = _pipeline(F, [_thrice(x) for x in P[:2]], _thrice(a), _thrice(beta),
+                                [_thrice(x) for x in shift], np.concatenate([w, both]), want_advance)
             base, *others = ({k: v[i * n:(i + 1) * n] for k, v in stacked.items()} for i in range(3))
         else:
             base = _pipeline(F, P, a, beta, shift, w, want_advance)
