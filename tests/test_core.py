@@ -148,6 +148,10 @@ def test_is_zero_proves_identities_and_refutes_non_identities():
     assert is_zero(sp.sin(a) ** 2 - sp.cos(a) ** 2) is False
     assert is_zero(sp.sin(a) * 1.0000001 - sp.sin(a)) is False
     assert is_zero(sp.sqrt(a) - 1) is None  # outside the method: caller must decide otherwise
+    # fractions (the unreduced N/D, N reduced modulo cos² + sin² − 1): the half-angle forms of the heavy top's b ∓ a
+    assert is_zero(c * (1 - sp.cos(a)) / sp.sin(a) ** 2 - c / (1 + sp.cos(a))) is True
+    assert is_zero(2 * sp.sin(a) ** 2 / (1 - sp.sin(a)) - 2 * sp.sin(a) ** 2 * (1 + sp.sin(a)) / sp.cos(a) ** 2) is True
+    assert is_zero(c / (1 + sp.cos(a)) - c / (1 - sp.cos(a))) is False
 
 
 def test_trig_normal_and_simplify_trig():

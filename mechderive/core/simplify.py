@@ -122,11 +122,24 @@ class TrigField:
         # lex order with each c before its s and before every other symbol: c² leads c² + s² − 1
         self.field = field([*trig, *others], sp.QQ)[0]
         ring = self.field.ring
-        gens = dict(zip([*trig, *others], ring.gens))
+        self._gens = gens = dict(zip([*trig, *others], ring.gens))
         self._basis = [gens[c] ** 2 + gens[s] ** 2 - 1 for c, s in zip(trig[::2], trig[1::2])]
 
     def __call__(self, expr: Any) -> Any:
         return self.field.from_expr(sp.expand_trig(as_symbolic(expr)).xreplace(self._fwd))
+
+    def is_zero(self, expr: Any) -> bool | None:
+        """Whether ``expr`` (in this field's angles and symbols, sines and cosines expanded) is identically 0:
+        as one unreduced fraction N/D of polynomials (:func:`_unreduced_fraction`: no gcds), 0 iff N reduces to 0
+        modulo cos² + sin² − 1 (the ideal is prime: N/D vanishes on the circles iff N lies in it, for D not in
+        it).  None where that form is not available (then :meth:`normal` of the element decides)."""
+        unreduced = _unreduced_fraction(as_symbolic(expr).xreplace(self._fwd), self.field.ring, self._gens)
+        if unreduced is None:
+            return None
+        num, den = unreduced
+        if self._basis:
+            num, den = num.rem(self._basis), den.rem(self._basis)
+        return None if not den else not num
 
     def normal(self, element: Any) -> sp.Expr:
         """The element as an expression: its numerator and denominator reduced modulo cos² + sin² − 1."""
@@ -150,7 +163,8 @@ def is_zero(expr: Any) -> bool | None:
     expr = sp.expand_trig(expr)
     try:  # in the field of rational functions of the cosines, sines and symbols (see trig_normal)
         field = TrigField([expr])
-        return field.normal(field(expr)) == 0
+        decided = field.is_zero(expr)
+        return field.normal(field(expr)) == 0 if decided is None else decided
     except (ValueError, BasePolynomialError):  # other atoms, floats: by expressions, or undecided
         pass
     num, _ = sp.fraction(sp.together(expr))
@@ -212,7 +226,7 @@ def _unreduced_fraction(expr: sp.Expr, R: Any, gens: dict) -> tuple | None:
     ``expr`` = N/D and D ≠ 0, not in lowest terms; None for anything but symbols, rationals, sums, products and
     integer powers, or where a denominator is 0."""
     if expr.is_Symbol:
-        return gens[expr], R.one
+        return (gens[expr], R.one) if expr in gens else None
     if expr.is_Rational:
         return R(sp.QQ.convert(expr)), R.one
     if expr.is_Add or expr.is_Mul:

@@ -44,7 +44,7 @@ import sympy as sp
 
 from ...core.lagrangian import LagrangianModel, from_state_symbols, vanishes
 from ...core.model import derived
-from ...core.simplify import as_fraction, factor, is_zero_rational, trig_normal
+from ...core.simplify import as_fraction, factor, is_zero, is_zero_rational, trig_normal
 from ...core.symbols import as_symbolic, euler_angles, state_symbol, t, to_state_symbols
 from ...errors import DerivationError
 from ...kinematics import euler as _euler
@@ -427,7 +427,7 @@ class HeavyTopModel(LagrangianModel):
             half = _product_replaced(factor(trig_normal(in_h)), (sp.sin(h) - 1, sp.sin(h) + 1), -sp.cos(h) ** 2)
             if not any(f in (sp.sin(h) ** 2, sp.cos(h) ** 2) for f in sp.Mul.make_args(half)):
                 half = factor(sp.trigsimp(factor(in_h)))  # the general (slow) route
-            if trig_normal(half - in_h) != 0:
+            if not is_zero(half - in_h):  # (exactly: by is_zero's unreduced fraction, no normal form built)
                 raise DerivationError(f"expected b {'+' if sign > 0 else '−'} a in the half angle, got {half}")
             out.append(half.xreplace({h: theta / 2}))
         return tuple(out)  # type: ignore[return-value]
