@@ -8,7 +8,7 @@ import sympy as sp
 
 from mechderive.core import compile as cc
 from mechderive.core.model import SymbolicModel, derivation_seconds, derived, deriving
-from mechderive.core.simplify import TrigField, factor, is_zero, simplify_trig, trig_normal
+from mechderive.core.simplify import TrigField, factor, is_zero, is_zero_rational, simplify_trig, trig_normal
 from mechderive.core.validate import as_finite_array, check_positive
 from mechderive.errors import InvalidInputError, NonFiniteValueError, ShapeError
 from mechderive.kinematics.euler import KinematicsModel
@@ -148,6 +148,10 @@ def test_is_zero_proves_identities_and_refutes_non_identities():
     assert is_zero(sp.sin(a) ** 2 - sp.cos(a) ** 2) is False
     assert is_zero(sp.sin(a) * 1.0000001 - sp.sin(a)) is False
     assert is_zero(sp.sqrt(a) - 1) is None  # outside the method: caller must decide otherwise
+    # fractions (the unreduced N/D, N reduced modulo cos² + sin² − 1): the half-angle forms of the heavy top's b ∓ a
+    assert is_zero(c * (1 - sp.cos(a)) / sp.sin(a) ** 2 - c / (1 + sp.cos(a))) is True
+    assert is_zero(2 * sp.sin(a) ** 2 / (1 - sp.sin(a)) - 2 * sp.sin(a) ** 2 * (1 + sp.sin(a)) / sp.cos(a) ** 2) is True
+    assert is_zero(c / (1 + sp.cos(a)) - c / (1 - sp.cos(a))) is False
 
 
 def test_trig_normal_and_simplify_trig():
@@ -254,3 +258,19 @@ def test_factor_is_sympys_factor_expression_for_expression():
     ]
     for e in exprs:
         assert sp.srepr(factor(e)) == sp.srepr(sp.factor(e)), e
+
+
+def test_is_zero_rational_decides_as_the_field_does():
+    # the unreduced fraction N/D (no gcds) against the sum in the field Q(symbols), on identities and near misses
+    a, b, u, x = sp.symbols("a b u x", real=True)
+    along = u + (1 - u) * x
+    rate = (b - a * along) / (1 - along**2)
+    identity = (a + b) / (2 * (1 + along)) - (a - b) / (2 * (1 - along)) - rate
+    assert is_zero_rational(identity) is True
+    assert is_zero_rational(identity + a / (1 - x)) is False
+    assert is_zero_rational(sp.Rational(1, 3) - sp.Integer(1) / 3) is True
+    assert is_zero_rational((a**2 - b**2) / (a - b) - a - b) is True
+    assert is_zero_rational(2 * a / 4 - a / 2 + 1 / (a * b) - 1 / (b * a)) is True
+    assert is_zero_rational(sp.sin(a) + a) is None
+    assert is_zero_rational(sp.sqrt(a) - a) is None
+    assert is_zero_rational(sp.Float(0.5) * a - a / 2) is True  # a float: by the field, as before

@@ -298,3 +298,14 @@ def test_sleeping_constants_from_the_upright_state():
     f = compile_expressions([m.constants_from_state[s] for s in (ht.a, ht.b, ht.alpha, ht.beta)], ARGS, name="abab")
     a, b, alpha, beta = f(*PARAMS, 0.0, 0.0, 0.7, 11.0)
     assert abs(a - b) < 1e-14 * abs(a) and abs(alpha - beta) < 1e-14 * abs(beta)
+
+
+def test_partial_fractions_by_residues_are_sympys_apart():
+    # the rates' partial fractions in u by residues at distinct linear poles: sympy.apart's expression (srepr)
+    u, a, b, I1, I3 = ht.u, ht.a, ht.b, ht.I1, ht.I3
+    cases = [(b - a * u) / (1 - u**2), (a - b * u) / (1 - u**2) + a * (I1 - I3) / I3,
+             (a * u**3 + b) / ((2 * u - 1) * (u + 3) * (I1 * u - a)), (u**2 + a) / ((u - a) * (u + b)),
+             (a * u + 1) / ((u - 1) ** 2 * (u + 2)), (u + b) / (u**2 + 1), a / (u - b), sp.Integer(3)]
+    for rate in cases:
+        rate = sp.together(rate)
+        assert sp.srepr(ht._apart(rate, u)) == sp.srepr(sp.apart(rate, u)), rate

@@ -122,11 +122,24 @@ class TrigField:
         # lex order with each c before its s and before every other symbol: c² leads c² + s² − 1
         self.field = field([*trig, *others], sp.QQ)[0]
         ring = self.field.ring
-        gens = dict(zip([*trig, *others], ring.gens))
+        self._gens = gens = dict(zip([*trig, *others], ring.gens))
         self._basis = [gens[c] ** 2 + gens[s] ** 2 - 1 for c, s in zip(trig[::2], trig[1::2])]
 
     def __call__(self, expr: Any) -> Any:
         return self.field.from_expr(sp.expand_trig(as_symbolic(expr)).xreplace(self._fwd))
+
+    def is_zero(self, expr: Any) -> bool | None:
+        """Whether ``expr`` (in this field's angles and symbols, sines and cosines expanded) is identically 0:
+        as one unreduced fraction N/D of polynomials (:func:`_unreduced_fraction`: no gcds), 0 iff N reduces to 0
+        modulo cos² + sin² − 1 (the ideal is prime: N/D vanishes on the circles iff N lies in it, for D not in
+        it).  None where that form is not available (then :meth:`normal` of the element decides)."""
+        unreduced = _unreduced_fraction(as_symbolic(expr).xreplace(self._fwd), self.field.ring, self._gens)
+        if unreduced is None:
+            return None
+        num, den = unreduced
+        if self._basis:
+            num, den = num.rem(self._basis), den.rem(self._basis)
+        return None if not den else not num
 
     def normal(self, element: Any) -> sp.Expr:
         """The element as an expression: its numerator and denominator reduced modulo cos² + sin² − 1."""
@@ -150,7 +163,8 @@ def is_zero(expr: Any) -> bool | None:
     expr = sp.expand_trig(expr)
     try:  # in the field of rational functions of the cosines, sines and symbols (see trig_normal)
         field = TrigField([expr])
-        return field.normal(field(expr)) == 0
+        decided = field.is_zero(expr)
+        return field.normal(field(expr)) == 0 if decided is None else decided
     except (ValueError, BasePolynomialError):  # other atoms, floats: by expressions, or undecided
         pass
     num, _ = sp.fraction(sp.together(expr))
@@ -179,12 +193,16 @@ def is_zero_rational(expr: Any) -> bool | None:
     """Whether a rational function of symbols is identically zero, decided exactly; ``None`` if ``expr`` is
     not one (sines, square roots, …: the caller decides otherwise).
 
-    Each term is brought into the field Q(symbols) and the terms are added there: a rational function is 0
-    iff its reduced numerator is the zero polynomial, found by the field's sparse polynomial arithmetic
-    without expanding expressions (:func:`sympy.cancel` of the together-ed sum spent most of its time in
-    Expr-level expansion: several times slower on the heavy top's partial fractions).
+    The expression is brought to one fraction N/D of polynomials over Q by ring arithmetic alone — a sum
+    n1/d1 + n2/d2 as (n1 d2 + n2 d1)/(d1 d2), not reduced — and is 0 iff N is the zero polynomial (D is a
+    product of the expression's nonzero denominators: a nonzero polynomial).  Lowest terms are not needed to
+    tell zero: the gcds the field Q(symbols) takes at every step were most of the time of the checks of the
+    heavy top's partial fractions.  Where that is not possible (a float, a constant such as √2, a denominator
+    that is itself 0) the terms are added in the field Q(symbols), as before.  (:func:`sympy.cancel` of the
+    together-ed sum spent most of its time in Expr-level expansion: several times slower still.)
     """
     from sympy.polys.fields import field
+    from sympy.polys.rings import ring
 
     expr = as_symbolic(expr)
     symbols = sorted(expr.free_symbols, key=sp.default_sort_key)
@@ -192,11 +210,50 @@ def is_zero_rational(expr: Any) -> bool | None:
         return None
     if not symbols:
         return expr == 0
+    R = ring(symbols, sp.QQ)[0]
+    unreduced = _unreduced_fraction(expr, R, dict(zip(symbols, R.gens)))
+    if unreduced is not None:
+        return not unreduced[0]
     K = field(symbols, sp.QQ)[0]
     total = K.zero
     for term in sp.Add.make_args(expr):
         total += K.from_expr(term)
     return total == 0
+
+
+def _unreduced_fraction(expr: sp.Expr, R: Any, gens: dict) -> tuple | None:
+    """(N, D), polynomials of the ring ``R`` (over Q, in the symbols ``gens`` maps to its generators) with
+    ``expr`` = N/D and D ≠ 0, not in lowest terms; None for anything but symbols, rationals, sums, products and
+    integer powers, or where a denominator is 0."""
+    if expr.is_Symbol:
+        return (gens[expr], R.one) if expr in gens else None
+    if expr.is_Rational:
+        return R(sp.QQ.convert(expr)), R.one
+    if expr.is_Add or expr.is_Mul:
+        num, den = (R.zero if expr.is_Add else R.one), R.one
+        for arg in expr.args:
+            part = _unreduced_fraction(arg, R, gens)
+            if part is None:
+                return None
+            n, d = part
+            if expr.is_Mul:
+                num, den = num * n, den * d
+            elif d == den:  # the same denominator (an integer, often): nothing to multiply out
+                num += n
+            else:
+                num, den = num * d + n * den, den * d
+        return num, den
+    if expr.is_Pow and expr.exp.is_Integer:
+        part = _unreduced_fraction(expr.base, R, gens)
+        if part is None:
+            return None
+        n, d, k = *part, int(expr.exp)
+        if k >= 0:
+            return n**k, d**k
+        if not n:  # 1/0
+            return None
+        return d ** (-k), n ** (-k)
+    return None
 
 
 def _is_rational_in_symbols(expr: sp.Expr) -> bool:

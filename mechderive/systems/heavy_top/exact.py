@@ -190,11 +190,14 @@ def _derived_rates():
 def _rates_build():
     import sympy as sp
 
+    from ...core.simplify import factor
     from . import model as hm
 
     phi_dot, psi_dot = hm.model().rates_near_poles
     x, y = sp.symbols("x_pole y_bottom", real=True)
-    half = [sp.collect(sp.expand((phi_dot + s * psi_dot) / 2), [x, y], sp.factor) for s in (1, -1)]
+    # each coefficient by the project's factor: sympy.factor's expression (checked against it, tests/test_core.py),
+    # without proving small polynomials irreducible by Wang's algorithm (most of this job's time in the child)
+    half = [sp.collect(sp.expand((phi_dot + s * psi_dot) / 2), [x, y], factor) for s in (1, -1)]
     dm, dp = sp.symbols("d_minus d_plus", real=True)
     return [hm.I1, hm.I3, dm, dp, x, y], [phi_dot, psi_dot, *half]
 

@@ -153,7 +153,8 @@ class HeavyTopExactModel(SymbolicModel):
             p, q = poly.all_coeffs()
             at_u1 = p * u1 + q
             terms.append((factor(num / at_u1), factor(-p * (u2 - u1) / at_u1)))
-        along = rate_u.subs(u, u1 + (u2 - u1) * _x)
+        # (only checked against: the symbol u's nodes replaced, what subs does, without its matching)
+        along = rate_u.xreplace({u: u1 + (u2 - u1) * _x})
         if not _is_zero_rational(c0 + sum(c / (1 - n * _x) for c, n in terms) - along):
             raise DerivationError("partial fractions do not reproduce the rate")
         # in a fixed order (of n), whatever order apart lists its terms in

@@ -44,7 +44,7 @@ import sympy as sp
 
 from ...core.lagrangian import LagrangianModel, from_state_symbols, vanishes
 from ...core.model import derived
-from ...core.simplify import as_fraction, factor, is_zero_rational, trig_normal
+from ...core.simplify import as_fraction, factor, is_zero, is_zero_rational, trig_normal
 from ...core.symbols import as_symbolic, euler_angles, state_symbol, t, to_state_symbols
 from ...errors import DerivationError
 from ...kinematics import euler as _euler
@@ -109,7 +109,52 @@ def partial_fractions_in_u(rate: sp.Expr) -> sp.Expr:
     """``rate``, a rational function of u, in partial fractions in u (SymPy's apart): shared by the rates near
     the poles (:attr:`HeavyTopModel.rates_near_poles`) and their partial fractions along the nutation
     (:mod:`.exact_model`), which take the same decomposition of φ̇ (3.74) and ψ̇ (3.75)."""
-    return sp.apart(sp.together(rate), u)
+    return _apart(sp.together(rate), u)
+
+
+def _apart(f: sp.Expr, x: sp.Symbol) -> sp.Expr:
+    """``sympy.apart(f, x)`` (undetermined coefficients, ``full=False``), the same expression, by SymPy's own
+    steps (:func:`sympy.polys.partfrac.apart`: P/Q over a common content, the polynomial part split off, the
+    denominators cleared, each term factored) except one: where Q's factors are distinct and linear in x (the
+    rates' 1 ∓ u), the numerator of 1/f for a factor f = l x + t is the residue P(r)/q(r) at its root r = −t/l,
+    q = Q/f (at r every other term's q vanishes), which is the value the linear system SymPy's ``solve`` sets up
+    there has as its one solution — each term is then factored (a normal form of its value, so the same
+    expression; by :func:`~mechderive.core.simplify.factor`, sympy.factor's expression).  SymPy's route for anything else.  Checked against ``sympy.apart`` in the tests."""
+    try:
+        from sympy.polys.partfrac import apart_undetermined_coeffs
+        from sympy.polys.polyoptions import set_defaults
+        from sympy.polys.polytools import parallel_poly_from_expr
+    except ImportError:  # pragma: no cover - a SymPy without them
+        return sp.apart(f, x)
+    f = sp.sympify(f)
+    if f.is_Atom or not f.is_commutative:
+        return sp.apart(f, x)
+    P, Q = f.as_numer_denom()
+    try:
+        (P, Q), _ = parallel_poly_from_expr((P, Q), x, **set_defaults({}, extension=True))
+    except sp.PolynomialError:
+        return sp.apart(f, x)
+    if P.is_multivariate:
+        return sp.apart(f, x)
+    common, P, Q = P.cancel(Q)
+    poly, P = P.div(Q, auto=True)
+    P, Q = P.rat_clear_denoms(Q)
+    if Q.degree() <= 1:
+        partial = P / Q
+    else:
+        _, factors = Q.factor_list()
+        if all(k == 1 and fac.degree() == 1 for fac, k in factors):
+            partial = sp.Integer(0)
+            for fac, _ in factors:
+                lead, tail = fac.all_coeffs()
+                root, q = -tail / lead, Q.quo(fac)
+                partial += P.as_expr().xreplace({x: root}) / q.as_expr().xreplace({x: root}) / fac.as_expr()
+        else:
+            partial = apart_undetermined_coeffs(P, Q)
+    terms = sp.Integer(0)
+    for term in sp.Add.make_args(partial):
+        terms += factor(term)  # (this package's: sympy.factor's expression, checked in tests/test_core.py)
+    return common * (poly.as_expr() + terms)
 
 
 def _over_one_minus_u2(expr: sp.Expr) -> sp.Expr:
@@ -427,7 +472,7 @@ class HeavyTopModel(LagrangianModel):
             half = _product_replaced(factor(trig_normal(in_h)), (sp.sin(h) - 1, sp.sin(h) + 1), -sp.cos(h) ** 2)
             if not any(f in (sp.sin(h) ** 2, sp.cos(h) ** 2) for f in sp.Mul.make_args(half)):
                 half = factor(sp.trigsimp(factor(in_h)))  # the general (slow) route
-            if trig_normal(half - in_h) != 0:
+            if not is_zero(half - in_h):  # (exactly: by is_zero's unreduced fraction, no normal form built)
                 raise DerivationError(f"expected b {'+' if sign > 0 else '−'} a in the half angle, got {half}")
             out.append(half.xreplace({h: theta / 2}))
         return tuple(out)  # type: ignore[return-value]
