@@ -126,7 +126,7 @@ def _apart(f: sp.Expr, x: sp.Symbol) -> sp.Expr:
         from sympy.polys.polytools import parallel_poly_from_expr
     except ImportError:  # pragma: no cover - a SymPy without them
         return sp.apart(f, x)
-    f = sp.sympify(f)
+    f = as_symbolic(f)
     if f.is_Atom or not f.is_commutative:
         return sp.apart(f, x)
     P, Q = f.as_numer_denom()
