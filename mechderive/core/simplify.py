@@ -196,8 +196,8 @@ def is_zero_rational(expr: Any) -> bool | None:
     The expression is brought to one fraction N/D of polynomials over Q by ring arithmetic alone — a sum
     n1/d1 + n2/d2 as (n1 d2 + n2 d1)/(d1 d2), not reduced — and is 0 iff N is the zero polynomial (D is a
     product of the expression's nonzero denominators: a nonzero polynomial).  Lowest terms are not needed to
-    tell zero: the gcds the field Q(symbols) takes at every step were most of the time of the checks of the
-    heavy top's partial fractions.  Where that is not possible (a float, a constant such as √2, a denominator
+    tell zero: the gcds the field Q(symbols) takes at every step were most of the time of the checks of a
+    derivation's partial fractions.  Where that is not possible (a float, a constant such as √2, a denominator
     that is itself 0) the terms are added in the field Q(symbols), as before.  (:func:`sympy.cancel` of the
     together-ed sum spent most of its time in Expr-level expansion: several times slower still.)
     """
