@@ -11,9 +11,10 @@ with a₀ = Π(n|m)/K and |a_k| falling like ρᵏ, ρ = exp(-π v/K) where ±iv
 integrand's nearest pole (sn²u = 1/n) from the real axis.  The coefficients come from the
 trapezoidal rule on M equally spaced points of one period — exact for a trigonometric
 polynomial, and for an analytic periodic integrand in error by ~ρ^M (aliasing) — the M/4 + 1
-coefficients that can be kept, as one product with a table of cosines (an FFT would compute all M/2
-of them, and importing ``numpy.fft`` cost more instructions than the product: ~6 M, 2 ms of a warm
-run); the series is summed by Clenshaw's recurrence (about 3 array operations a term).
+coefficients that can be kept: at M = 128, as one product with a table of cosines (an FFT would compute all
+M/2 of them, and importing ``numpy.fft`` cost more instructions than the product: ~6 M, 2 ms of a warm run);
+at M = 512 by the FFT, whose rounding grows like log M where the product's grows like √M (see
+:data:`_PRODUCT_UP_TO`); the series is summed by Clenshaw's recurrence (about 3 array operations a term).
 
 For the usual top (ρ ≈ 0.25, 27 terms) this costs ~0.5 ms for 2001 phases and two
 characteristics, against ~3 ms by Carlson's R_J (:func:`mechderive.special.integrals.pi_of_am`).
@@ -37,6 +38,11 @@ _SAMPLES = (128, 512)
 #: leaves every coefficient with noise of up to ~1.2e-16 of it (measured at M = 512 on 60 random motions;
 #: the FFT's was 3e-17 to 1.7e-16), so the series is cut where the true coefficients sink into that noise.
 _TAIL = 2e-16
+#: the largest M whose coefficients come from the product with a table of cosines; above it, from the FFT. The
+#: product spares the import of ``numpy.fft`` (~6 M instructions, 2 ms of a warm run) for the usual top (M = 128),
+#: but its rounding grows with M: near the separatrix (M = 512) a free top's R came out 7e-15 off a 30-digit
+#: integration where the FFT's coefficients give 2.4e-15 (tests/test_s3_4_free_top_edges.py::test_separatrix_full)
+_PRODUCT_UP_TO = 128
 
 
 class PiSeries:
@@ -94,9 +100,12 @@ def fit_pi_series(n: np.ndarray, sn_squared, K: float) -> PiSeries | None:
         g = 1.0 / (1.0 - n[:, None] * sn_squared(u)[None, :])       # (k, M), one period, even in u
         # a₀ and a_k/2 = (1/M) Σ_j g_j cos(2πjk/M) for k ≤ M/4, the angles reduced exactly (jk mod M): the
         # table's entries are the M values cos(2πi/M), looked up (not its (M/4 + 1)·M cosines evaluated)
-        k = np.arange(samples // 4 + 1)
-        cosines = np.cos((2.0 * np.pi / samples) * np.arange(samples))[np.outer(np.arange(samples), k) % samples]
-        spectrum = (g @ cosines) / samples
+        if samples <= _PRODUCT_UP_TO:
+            k = np.arange(samples // 4 + 1)
+            cosines = np.cos((2.0 * np.pi / samples) * np.arange(samples))[np.outer(np.arange(samples), k) % samples]
+            spectrum = (g @ cosines) / samples
+        else:  # the FFT's rounding grows like log M, the product's like √M: at M = 512 the product lost R's last bits
+            spectrum = np.fft.rfft(g, axis=1).real[:, :samples // 4 + 1] / samples
         a = 2.0 * spectrum[:, 1: samples // 4 + 1]
         small = np.all(np.abs(a) <= _TAIL * np.max(np.abs(g), axis=1)[:, None], axis=0)
         # N: the number of terms kept — every coefficient after it is negligible for every n
