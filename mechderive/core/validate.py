@@ -1,4 +1,5 @@
-"""Input checks shared by every layer: finite numbers, shapes, rotation matrices.
+"""Input checks shared by every layer: finite numbers, shapes, rotation matrices; and the mask tests
+:func:`every` and :func:`some` they and the numerical loops use (cheap on one element).
 
 Checks raise; they never silently repair input (STYLE.md habit 6).
 """
